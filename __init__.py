@@ -1,0 +1,21 @@
+"""XSL Render: perceptual selective rendering of participating media with Cycles.
+
+Implements Sundstedt, Gutierrez, Anson, Banterle and Chalmers, "Perceptual Rendering of
+Participating Media" (ACM TAP 4(3), 2007). This file only registers the add-on; the
+bpy-free engine is in ``core``, the Blender side in ``addon`` and ``operators``.
+"""
+
+
+def register():
+    # Imported here so that ``core`` and the command line can be used without bpy.
+    from . import addon, operators
+
+    addon.register()
+    operators.register()
+
+
+def unregister():
+    from . import addon, operators
+
+    operators.unregister()
+    addon.unregister()

@@ -1,0 +1,126 @@
+"""Reading and writing images with OpenImageIO; every write is atomic.
+
+Maps and renders are float32 OpenEXR. Arrays are ``[row, column, channel]`` with row 0 at
+the top. A write goes to a temporary name in the same folder and is renamed into place,
+so a crash or a cancel never leaves a half-written file under the real name.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+
+from .errors import InputError
+from .files import atomic_path
+
+
+def read_image(path: str | os.PathLike) -> np.ndarray:
+    """Read any image OpenImageIO understands as float32 ``(H, W, C)``.
+
+    8- and 16-bit files come back in [0, 1] (their stored values, not linearised); float
+    files as stored. Raises InputError for a missing, unreadable or empty image.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"no such image file: {path}")
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        reason = oiio.geterror().strip().splitlines()
+        raise InputError(f"cannot read image {path}: {reason[0] if reason else 'unknown format'}")
+    try:
+        spec = image.spec()
+        if spec.width < 1 or spec.height < 1 or spec.nchannels < 1:
+            raise InputError(f"image {path} has no pixels")
+        pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        if pixels is None:
+            reason = image.geterror().strip().splitlines()
+            raise InputError(f"cannot read image {path}: {reason[0] if reason else 'read failed'}")
+    finally:
+        image.close()
+    pixels = np.asarray(pixels, dtype=np.float32)
+    if pixels.ndim == 2:
+        pixels = pixels[:, :, None]
+    return pixels.reshape(spec.height, spec.width, spec.nchannels)
+
+
+def image_channel_names(path: str | os.PathLike) -> list[str]:
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        raise InputError(f"cannot read image {path}")
+    try:
+        return list(image.spec().channelnames)
+    finally:
+        image.close()
+
+
+def _as_hwc(array: np.ndarray) -> np.ndarray:
+    array = np.asarray(array)
+    if array.ndim == 2:
+        array = array[:, :, None]
+    if array.ndim != 3 or array.shape[0] < 1 or array.shape[1] < 1:
+        raise ValueError(f"expected an (H, W) or (H, W, C) image, got shape {array.shape}")
+    return array
+
+
+def _default_channels(count: int) -> list[str]:
+    return {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}.get(
+        count, [f"C{i}" for i in range(count)])
+
+
+def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: list[str] | None = None,
+              attributes: dict[str, object] | None = None) -> Path:
+    """Write a float32 OpenEXR (ZIP compressed) atomically.
+
+    A 2-D array becomes one channel named ``Y``. Refuses NaN and Inf: a map with them
+    is a bug upstream and must not reach a file.
+    """
+    data = np.ascontiguousarray(_as_hwc(array), dtype=np.float32)
+    if not np.isfinite(data).all():
+        raise ValueError(f"refusing to write NaN or Inf to {path}")
+    names = channel_names or _default_channels(data.shape[2])
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], oiio.FLOAT)
+    spec.channelnames = tuple(names)
+    spec.attribute("compression", "zip")
+    for key, value in (attributes or {}).items():
+        spec.attribute(key, value if isinstance(value, (int, float)) else str(value))
+    return _write(path, data, spec)
+
+
+def write_png(path: str | os.PathLike, array: np.ndarray, encode_srgb: bool = False) -> Path:
+    """Write an 8-bit PNG preview of values in [0, 1] (clipped) atomically.
+
+    ``encode_srgb`` applies the sRGB transfer curve first (for linear images); maps are
+    written as they are, so a grey level in the PNG is the map value.
+    """
+    data = np.clip(np.nan_to_num(_as_hwc(array).astype(np.float32)), 0.0, 1.0)
+    if encode_srgb:
+        data = linear_to_srgb(data)
+    data = np.round(data * 255.0).astype(np.uint8)
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], oiio.UINT8)
+    spec.channelnames = tuple(_default_channels(data.shape[2]))
+    return _write(path, np.ascontiguousarray(data), spec)
+
+
+def _write(path: str | os.PathLike, data: np.ndarray, spec: "oiio.ImageSpec") -> Path:
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None:
+            raise InputError(f"cannot write {path}: {oiio.geterror().strip() or 'unknown format'}")
+        try:
+            if not out.open(str(tmp), spec):
+                raise InputError(f"cannot write {path}: {out.geterror().strip()}")
+            if not out.write_image(data):
+                raise InputError(f"cannot write {path}: {out.geterror().strip()}")
+        finally:
+            out.close()
+    return path
+
+
+def linear_to_srgb(linear: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) on values in [0, 1]."""
+    linear = np.clip(linear, 0.0, 1.0)
+    return np.where(linear <= 0.0031308, 12.92 * linear,
+                    1.055 * np.power(linear, 1.0 / 2.4) - 0.055).astype(np.float32)

@@ -1,0 +1,77 @@
+"""The ``xsl-render`` command: parse, call, report.
+
+Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(parser)`` and
+``run(args) -> int``. Exit codes: 0 success, 2 bad input (one line on stderr, no traceback),
+1 an unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import traceback
+
+from ..core.errors import InputError
+from .console import blender_chatter_to_log
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line and exit code 2."""
+
+    def error(self, message: str):  # noqa: D401 - argparse API
+        raise InputError(f"{self.prog}: {message}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .commands import COMMANDS
+
+    parser = OneLineParser(prog="xsl-render",
+                           description="Perceptual selective rendering of participating media "
+                                       "(Sundstedt et al. 2007) with Blender Cycles.")
+    parser.add_argument("--verbose", action="store_true",
+                        help="keep Blender's console output in a log file and print its path")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    sub.required = True
+    for command in COMMANDS:
+        child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
+        command.add_arguments(child)
+        child.set_defaults(run=command.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        args = build_parser().parse_args(argv)
+    except InputError as error:
+        print(f"{error} (see --help)", file=sys.stderr)
+        return 2
+    except SystemExit as done:          # --help
+        return int(done.code or 0)
+    with blender_chatter_to_log(keep=args.verbose) as log_path:
+        try:
+            code = args.run(args)
+        except InputError as error:
+            print(f"xsl-render: error: {error}", file=sys.stderr)
+            code = 2
+        except KeyboardInterrupt:
+            print("xsl-render: cancelled", file=sys.stderr)
+            code = 130
+        except Exception as error:     # our bug, not the user's: say so in one line
+            if os.environ.get("XSL_DEBUG"):
+                traceback.print_exc()
+            message = str(error).strip().splitlines()[0] if str(error).strip() else ""
+            print(f"xsl-render: internal error: {type(error).__name__}: {message} "
+                  "(set XSL_DEBUG=1 for the traceback)", file=sys.stderr)
+            code = 1
+        if args.verbose:
+            print(f"xsl-render: Blender's console output is in {log_path}", file=sys.stderr)
+    return code
+
+
+def entry() -> None:
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    entry()

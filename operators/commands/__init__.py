@@ -1,0 +1,4 @@
+"""Subcommands of ``xsl-render``; each module has NAME, HELP, add_arguments() and run()."""
+from . import info
+
+COMMANDS = [info]

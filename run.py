@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Set up and run xsl_render from nothing: ``python3 run.py demo`` or ``python3 run.py test``.
+
+On first use (and whenever requirements.lock or pyproject.toml change) this creates
+``.venv`` next to this file, installs the pinned versions from requirements.lock and
+installs the project itself in editable mode, which puts the ``xsl-render`` command
+into ``.venv``. Then it does its job:
+
+    demo [ARGS...]   the main job: ``xsl-render demo`` (extra ARGS are passed on)
+    test [ARGS...]   the test suite: ``pytest`` (extra ARGS are passed on)
+
+Only the Python standard library is used here, so any Python 3.11 can run it.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+STAMP = VENV / ".xsl-installed"
+INPUTS = ("requirements.lock", "pyproject.toml")
+
+
+def venv_bin(name: str) -> Path:
+    folder = "Scripts" if os.name == "nt" else "bin"
+    suffix = ".exe" if os.name == "nt" else ""
+    return VENV / folder / f"{name}{suffix}"
+
+
+def wanted_stamp() -> str:
+    digest = hashlib.sha256()
+    for name in INPUTS:
+        digest.update((ROOT / name).read_bytes())
+    return digest.hexdigest()
+
+
+def ensure_venv() -> None:
+    if sys.version_info[:2] != (3, 11):
+        sys.exit(f"run.py: Python 3.11 is needed (bpy 5.0 is built for it); this is {sys.version.split()[0]}")
+    stamp = wanted_stamp()
+    if STAMP.exists() and STAMP.read_text() == stamp and venv_bin("xsl-render").exists():
+        return
+    if not venv_bin("python").exists():
+        print("run.py: creating .venv", file=sys.stderr)
+        subprocess.check_call([sys.executable, "-m", "venv", str(VENV)])
+    python = str(venv_bin("python"))
+    print("run.py: installing pinned packages from requirements.lock", file=sys.stderr)
+    pip = [python, "-m", "pip", "--disable-pip-version-check", "-q"]
+    subprocess.check_call(pip + ["install", "-r", str(ROOT / "requirements.lock")])
+    # --no-deps: every dependency is pinned in the lock file, not in pyproject.toml.
+    subprocess.check_call(pip + ["install", "--no-deps", "--no-build-isolation", "-e", str(ROOT)])
+    STAMP.write_text(stamp)
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in ("demo", "test"):
+        print(__doc__, file=sys.stderr)
+        return 2
+    ensure_venv()
+    job, rest = argv[0], argv[1:]
+    if job == "demo":
+        command = [str(venv_bin("xsl-render")), "demo", *rest]
+    else:
+        command = [str(venv_bin("python")), "-m", "pytest", *rest]
+    return subprocess.call(command, cwd=ROOT)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

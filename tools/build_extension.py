@@ -1,0 +1,141 @@
+"""Download the pinned wheels and build the Blender extension zips.
+
+    python tools/build_extension.py [--out DIR] [--sync-manifest] [--skip-download]
+
+1. Reads the lines tagged ``# wheel`` in requirements.lock (the one place versions are pinned).
+2. Downloads each as a binary wheel for every platform of the manifest into ``wheels/``
+   (``pip download --only-binary=:all: --platform ...``; nothing is ever compiled).
+3. Checks that the manifest's ``wheels`` list names exactly those files
+   (``--sync-manifest`` rewrites the list instead).
+4. Validates the repository root with Blender's own ``blender_ext.py validate`` and builds
+   one zip per platform with ``blender_ext.py build --split-platforms`` into DIR (``dist/``).
+
+Blender's extension tool ships inside the bpy wheel, so run this with the project's
+``.venv`` Python (``python3 run.py test`` creates it).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+WHEEL_DIR = ROOT / "wheels"
+
+# Blender platform -> pip --platform tags, newest first. A wheel that names any of these
+# runs on Blender's minimum OS for that platform (glibc 2.28, Windows 10, macOS 11).
+PIP_PLATFORMS = {
+    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_24_x86_64",
+                  "manylinux_2_17_x86_64", "manylinux2014_x86_64"],
+    "windows-x64": ["win_amd64"],
+    "macos-arm64": ["macosx_12_0_arm64", "macosx_11_0_arm64"],
+}
+
+
+def pinned_wheels(lock: Path = ROOT / "requirements.lock") -> list[str]:
+    """The ``name==version`` requirements tagged ``# wheel`` in the lock file."""
+    specs = []
+    for line in lock.read_text().splitlines():
+        requirement, _, comment = line.partition("#")
+        if requirement.strip() and comment.strip() == "wheel":
+            specs.append(requirement.strip())
+    return specs
+
+
+def manifest_wheels(manifest: Path = ROOT / "blender_manifest.toml") -> list[str]:
+    return tomllib.loads(manifest.read_text()).get("wheels", [])
+
+
+def download(specs: list[str], platforms: list[str]) -> list[str]:
+    """pip-download every spec for every platform; returns the manifest paths of the files."""
+    WHEEL_DIR.mkdir(exist_ok=True)
+    names: set[str] = set()
+    for platform in platforms:
+        tags = [arg for tag in PIP_PLATFORMS[platform] for arg in ("--platform", tag)]
+        subprocess.check_call([
+            sys.executable, "-m", "pip", "download", "-q", "--disable-pip-version-check",
+            "--only-binary=:all:", "--no-deps", "--python-version", "3.11",
+            "--implementation", "cp", "--abi", "cp311", *tags, "-d", str(WHEEL_DIR), *specs,
+        ])
+        names.update(wheel_files_for(specs, platform))
+    return sorted(f"./wheels/{name}" for name in names)
+
+
+def wheel_files_for(specs: list[str], platform: str) -> list[str]:
+    """The files in wheels/ that satisfy ``specs`` on ``platform`` (one per spec)."""
+    tags = PIP_PLATFORMS[platform]
+    found = []
+    for spec in specs:
+        name, version = spec.split("==")
+        stem = re.sub(r"[-_.]+", "_", name).lower()
+        candidates = [p.name for p in WHEEL_DIR.glob("*.whl")
+                      if p.name.lower().startswith(f"{stem}-{version}-")]
+        usable = [c for c in candidates if c.endswith("-none-any.whl")
+                  or any(tag in c for tag in tags)]
+        if not usable:
+            raise SystemExit(f"build_extension: no {platform} wheel for {spec} in wheels/")
+        found.append(sorted(usable)[0])
+    return found
+
+
+def write_manifest_wheels(paths: list[str], manifest: Path = ROOT / "blender_manifest.toml") -> None:
+    text = manifest.read_text()
+    block = "wheels = [\n" + "".join(f'  "{p}",\n' for p in paths) + "]"
+    new, count = re.subn(r"wheels = \[[^\]]*\]", block, text)
+    if count != 1:
+        raise SystemExit("build_extension: no single `wheels = [...]` list in the manifest")
+    manifest.write_text(new)
+
+
+def blender_ext() -> Path:
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        raise SystemExit("build_extension: the bpy module is not installed; run with .venv's Python")
+    found = sorted(Path(spec.submodule_search_locations[0]).glob("*/scripts/addons_core/bl_pkg/cli/blender_ext.py"))
+    if not found:
+        raise SystemExit("build_extension: blender_ext.py not found inside the bpy module")
+    return found[-1]
+
+
+def build(out: Path) -> list[Path]:
+    tool = blender_ext()
+    subprocess.check_call([sys.executable, str(tool), "validate", str(ROOT)])
+    out.mkdir(parents=True, exist_ok=True)
+    subprocess.check_call([sys.executable, str(tool), "build", "--source-dir", str(ROOT),
+                           "--output-dir", str(out), "--split-platforms"])
+    return sorted(out.glob("xsl_render-*.zip"))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "dist", help="folder for the zips (dist/)")
+    parser.add_argument("--sync-manifest", action="store_true",
+                        help="rewrite the manifest's wheels list from requirements.lock")
+    parser.add_argument("--skip-download", action="store_true", help="use the files already in wheels/")
+    args = parser.parse_args(argv)
+
+    platforms = tomllib.loads((ROOT / "blender_manifest.toml").read_text())["platforms"]
+    specs = pinned_wheels()
+    if args.skip_download:
+        paths = sorted({f"./wheels/{n}" for p in platforms for n in wheel_files_for(specs, p)})
+    else:
+        paths = download(specs, platforms)
+    if args.sync_manifest:
+        write_manifest_wheels(paths)
+    elif paths != sorted(manifest_wheels()):
+        missing = sorted(set(paths) - set(manifest_wheels()))
+        extra = sorted(set(manifest_wheels()) - set(paths))
+        raise SystemExit("build_extension: the manifest's wheels differ from requirements.lock "
+                         f"(not listed: {missing}; listed but not pinned: {extra}); "
+                         "run with --sync-manifest")
+    for zip_path in build(args.out):
+        print(zip_path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
