@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -56,6 +57,22 @@ def ensure_venv() -> None:
     STAMP.write_text(stamp)
 
 
+def ensure_browser() -> None:
+    """The report and experiment-page tests drive a headless Chromium. Debian's package is
+    the only browser reachable without the open internet; install it when we can."""
+    if shutil.which("chromium") or os.name == "nt" or not shutil.which("apt-get"):
+        return
+    if hasattr(os, "geteuid") and os.geteuid() != 0:
+        print("run.py: chromium not found (apt-get install chromium); browser tests will skip",
+              file=sys.stderr)
+        return
+    print("run.py: installing Debian's chromium for the browser tests", file=sys.stderr)
+    quiet = {"stdout": subprocess.DEVNULL, "env": {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}}
+    if subprocess.call(["apt-get", "update", "-q"], **quiet) == 0:
+        subprocess.call(["apt-get", "install", "-y", "-q", "--no-install-recommends",
+                         "chromium", "chromium-driver"], **quiet)
+
+
 def main(argv: list[str]) -> int:
     if not argv or argv[0] not in ("demo", "test"):
         print(__doc__, file=sys.stderr)
@@ -65,6 +82,7 @@ def main(argv: list[str]) -> int:
     if job == "demo":
         command = [str(venv_bin("xsl-render")), "demo", *rest]
     else:
+        ensure_browser()
         command = [str(venv_bin("python")), "-m", "pytest", *rest]
     return subprocess.call(command, cwd=ROOT)
 
