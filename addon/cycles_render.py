@@ -1,0 +1,103 @@
+"""One Cycles render of the scene as it is set up now, returned as numpy arrays.
+
+The render result of a background session cannot be read from Python directly, so the
+frame goes through a temporary multilayer EXR. Callers change settings inside
+``addon.scene_state.preserved_scene``; this module only sets the output it needs (and that
+is put back by the same block).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+
+from ..core.errors import InputError
+
+#: Pass name in the EXR -> (view-layer flag enabling it, channels).
+PASSES = {
+    "Combined": (None, "RGBA"),
+    "Depth": ("use_pass_z", "Z"),
+    "Normal": ("use_pass_normal", "XYZ"),
+    "Emit": ("use_pass_emit", "RGB"),
+}
+
+
+def ensure_cycles(scene) -> None:
+    if scene.render.engine != "CYCLES":
+        scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+
+
+def render_passes(scene, passes: tuple[str, ...] = ("Combined",), view_layer=None) -> dict[str, np.ndarray]:
+    """Render with Cycles and return the requested passes as float32 ``(H, W, C)`` arrays.
+
+    Row 0 is the top of the image. With a render border and crop on, the arrays have the
+    border's size. Must run inside ``preserved_scene`` (it changes the output settings).
+    """
+    import bpy
+
+    ensure_cycles(scene)
+    layer = view_layer or scene.view_layers[0]
+    for name in passes:
+        flag = PASSES[name][0]
+        if flag and not getattr(layer, flag):
+            setattr(layer, flag, True)
+    settings = scene.render.image_settings
+    if hasattr(settings, "media_type"):          # Blender 5.0+: the format follows the media type
+        settings.media_type = "MULTI_LAYER_IMAGE"
+    settings.file_format = "OPEN_EXR_MULTILAYER"
+    settings.color_depth = "32"
+    settings.exr_codec = "ZIP"
+    scene.render.use_file_extension = True
+    folder = Path(tempfile.mkdtemp(prefix="xsl-render-"))
+    try:
+        scene.render.filepath = str(folder / "frame")
+        result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=layer.name)
+        if "FINISHED" not in result:
+            raise RuntimeError(f"Cycles did not finish the render ({result})")
+        files = sorted(folder.glob("frame*.exr"))
+        if not files:
+            raise RuntimeError("Cycles wrote no image")
+        return read_multilayer(files[0], layer.name, passes)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Read named passes of one view layer from a Blender multilayer EXR.
+
+    Blender 5 writes each pass as its own part (subimage); older versions put all channels
+    in one part. Both are handled by collecting channels over every part.
+    """
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        raise InputError(f"cannot read {path}: {oiio.geterror()}")
+    channels: dict[str, np.ndarray] = {}
+    try:
+        subimage = 0
+        while image.seek_subimage(subimage, 0):
+            spec = image.spec()
+            pixels = image.read_image(subimage, 0, 0, spec.nchannels, oiio.FLOAT)
+            pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
+            for i, name in enumerate(spec.channelnames):
+                channels[name] = pixels[:, :, i]
+            subimage += 1
+    finally:
+        image.close()
+    out = {}
+    for name in passes:
+        wanted = PASSES[name][1] if name in PASSES else "RGBA"
+        found = []
+        for c in wanted:
+            for candidate in (f"{layer}.{name}.{c}", f"{name}.{c}"):
+                if candidate in channels:
+                    found.append(channels[candidate])
+                    break
+        if not found:
+            raise RuntimeError(f"pass {name} missing from the render (has: {sorted(channels)[:8]})")
+        out[name] = np.ascontiguousarray(np.stack(found, axis=-1), dtype=np.float32)
+    return out

@@ -1,0 +1,164 @@
+"""Leave the user's scene exactly as we found it.
+
+Every render xsl_render makes (the X-map oracle, the snapshot, the light map, the tiles)
+changes settings: engine, samples, border, output path, view-layer flags, materials. All of
+that happens inside ``preserved_scene(scene)``, which records the settings first and puts
+them back afterwards, whether the block finishes, raises, or is cancelled.
+
+Materials and worlds are never edited in place: temporary copies are assigned to the
+slots (``swap_material``) and the originals are put back; every datablock created inside
+the block is removed at the end unless it is handed to ``keep``.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+# RNA property types we record and restore by value.
+_VALUE_TYPES = {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"}
+# Collections of bpy.data whose new members are removed at the end of a block.
+_DATA_COLLECTIONS = ("materials", "worlds", "images", "node_groups", "objects", "meshes",
+                     "lights", "cameras", "textures", "collections", "volumes")
+
+
+def rna_values(struct, skip: tuple[str, ...] = ()) -> dict:
+    """The editable value properties (and ID pointers) of an RNA struct, as plain data."""
+    values = {}
+    for prop in struct.bl_rna.properties:
+        name = prop.identifier
+        if name in ("rna_type", "name") or name in skip or prop.is_readonly:
+            continue
+        if prop.type in _VALUE_TYPES:
+            value = getattr(struct, name)
+            if getattr(prop, "is_array", False) or (prop.type != "STRING" and hasattr(value, "__len__")
+                                                    and not isinstance(value, (str, set))):
+                value = tuple(value)
+            elif isinstance(value, set):
+                value = frozenset(value)
+            values[name] = value
+        elif prop.type == "POINTER" and getattr(prop.fixed_type, "bl_rna", None) is not None:
+            target = getattr(struct, name)
+            if target is None or _is_id(target):
+                values[name] = target
+    return values
+
+
+def _plain(value):
+    """An RNA value in the form rna_values records it (arrays as tuples, enum sets frozen)."""
+    if isinstance(value, set):
+        return frozenset(value)
+    if hasattr(value, "__len__") and not isinstance(value, str) and not _is_id(value):
+        return tuple(value)
+    return value
+
+
+def _is_id(value) -> bool:
+    import bpy
+
+    return isinstance(value, bpy.types.ID)
+
+
+def restore_values(struct, values: dict) -> None:
+    """Set every recorded property back, in two passes (some settings depend on others)."""
+    for _ in range(2):
+        for name, value in values.items():
+            try:
+                if _plain(getattr(struct, name)) != value:
+                    setattr(struct, name, set(value) if isinstance(value, frozenset) else value)
+            except (AttributeError, TypeError, ValueError, RuntimeError):
+                # A property that is only settable in some states; the second pass retries.
+                continue
+
+
+def _structs(scene) -> dict:
+    """Name -> RNA struct for everything a render may touch."""
+    structs = {
+        "scene": scene,
+        "render": scene.render,
+        "image_settings": scene.render.image_settings,
+        "view_settings": scene.view_settings,
+        "display_settings": scene.display_settings,
+    }
+    if hasattr(scene, "cycles"):
+        structs["cycles"] = scene.cycles
+    for layer in scene.view_layers:
+        structs[f"view_layer:{layer.name}"] = layer
+        if hasattr(layer, "cycles"):
+            structs[f"view_layer_cycles:{layer.name}"] = layer.cycles
+    if scene.world is not None and hasattr(scene.world, "cycles_visibility"):
+        structs["world_visibility"] = scene.world.cycles_visibility
+    return structs
+
+
+def settings_dump(scene) -> dict:
+    """Every recorded setting of the scene, render, Cycles and view layers, for comparing."""
+    dump = {name: rna_values(struct) for name, struct in _structs(scene).items()}
+    dump["material_slots"] = _material_slots(scene)
+    dump["hide_render"] = {ob.name: ob.hide_render for ob in scene.objects}
+    return dump
+
+
+def _material_slots(scene) -> dict:
+    return {ob.name: tuple((slot.link, slot.material) for slot in ob.material_slots)
+            for ob in scene.objects}
+
+
+class SceneState:
+    """Handle given to the body of ``preserved_scene``: swap materials, keep datablocks."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self._kept: set = set()
+
+    def swap_material(self, ob, slot_index: int, material) -> None:
+        """Put ``material`` into a slot for the duration of the block (the original returns)."""
+        ob.material_slots[slot_index].material = material
+
+    def keep(self, datablock) -> None:
+        """Do not remove this datablock at the end (e.g. an image shown to the artist)."""
+        self._kept.add(datablock.as_pointer())
+
+
+@contextmanager
+def preserved_scene(scene):
+    """Record the scene's settings, run the block, put everything back.
+
+    Restores: scene, render, image, colour-management, Cycles and view-layer settings
+    (frame, camera, world, engine, samples, border, output path, persistent data, passes,
+    volume flags, material override), material slot assignments and object render
+    visibility; removes datablocks the block created (unless kept).
+    """
+    import bpy
+
+    structs = _structs(scene)
+    saved = {name: rna_values(struct) for name, struct in structs.items()}
+    slots = {ob: [(slot.link, slot.material) for slot in ob.material_slots] for ob in scene.objects}
+    hidden = {ob: ob.hide_render for ob in scene.objects}
+    before = {name: set(item.as_pointer() for item in getattr(bpy.data, name))
+              for name in _DATA_COLLECTIONS}
+    state = SceneState(scene)
+    try:
+        yield state
+    finally:
+        # Settings first: they matter most and cannot fail as a whole.
+        for name, struct in structs.items():
+            restore_values(struct, saved[name])
+        for ob, entries in slots.items():
+            _restore_slots(ob, entries)
+        for ob, value in hidden.items():
+            if ob.hide_render != value:
+                ob.hide_render = value
+        for name in _DATA_COLLECTIONS:
+            collection = getattr(bpy.data, name)
+            for item in list(collection):
+                pointer = item.as_pointer()
+                if pointer not in before[name] and pointer not in state._kept:
+                    collection.remove(item)
+
+
+def _restore_slots(ob, entries) -> None:
+    # Blocks swap materials in existing slots (SceneState.swap_material); they never add slots.
+    for slot, (link, material) in zip(ob.material_slots, entries):
+        if slot.link != link:
+            slot.link = link
+        if slot.material != material:
+            slot.material = material
