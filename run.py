@@ -6,7 +6,7 @@ On first use (and whenever requirements.lock or pyproject.toml change) this crea
 installs the project itself in editable mode, which puts the ``xsl-render`` command
 into ``.venv``. Then it does its job:
 
-    demo [ARGS...]   the main job: ``xsl-render demo`` (extra ARGS are passed on)
+    demo [ARGS...]   the main job on the bundled road scene (extra ARGS are passed on)
     test [ARGS...]   the test suite: ``pytest`` (extra ARGS are passed on)
 
 Only the Python standard library is used here, so any Python 3.11 can run it.
@@ -80,7 +80,8 @@ def main(argv: list[str]) -> int:
     ensure_venv()
     job, rest = argv[0], argv[1:]
     if job == "demo":
-        command = [str(venv_bin("xsl-render")), "demo", *rest]
+        # Until the selective renderer lands, the main job describes the road scene.
+        command = [str(venv_bin("xsl-render")), "info", str(ROOT / "example_blends" / "road.blend"), *rest]
     else:
         ensure_browser()
         command = [str(venv_bin("python")), "-m", "pytest", *rest]
