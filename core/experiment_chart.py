@@ -57,10 +57,11 @@ def write_bar_chart(cells: list[dict], path: str | os.PathLike, title: str | Non
     axes.set_xticks(x, scenes)
     axes.set_ylim(0, 100)
     axes.set_ylabel("correct (%)")
-    axes.legend(loc="upper left", fontsize=8, frameon=False, ncols=len(conditions) + 1)
+    # Above the axes, where no bar can reach (they go up to 100%).
+    figure.legend(loc="outside upper center", fontsize=8, frameon=False, ncols=len(conditions) + 1)
     axes.spines[["top", "right"]].set_visible(False)
     if title:
-        axes.set_title(title)
+        figure.suptitle(title)
     path = Path(path)
     with atomic_path(path) as tmp:
         figure.savefig(tmp, format="png")

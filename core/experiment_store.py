@@ -78,12 +78,19 @@ def _now() -> str:
 class ExperimentStore:
     """The experiment database, shared by the server's request threads."""
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, durable: bool = True):
+        """Open or create the database at ``path``.
+
+        ``durable`` (the default, and what the server uses) has SQLite flush every commit to
+        the disk before it returns, so an answer acknowledged to the page survives even a
+        power cut. ``False`` skips the flushes, for building databases in bulk (tests).
+        """
         self.path = Path(path)
         try:
             self._db = sqlite3.connect(str(self.path), isolation_level=None,
                                        check_same_thread=False, timeout=10.0)
             self._db.execute("PRAGMA foreign_keys = ON")
+            self._db.execute(f"PRAGMA synchronous = {'FULL' if durable else 'OFF'}")
             self._db.executescript(_SCHEMA)
             self._db.execute("INSERT OR IGNORE INTO meta VALUES ('schema_version', ?)",
                              (SCHEMA_VERSION,))

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import errno
 import json
+import os
 import random
 import secrets
 import sys
+import traceback
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -96,6 +98,17 @@ class ExperimentServer(ThreadingHTTPServer):
         return {"participant_id": plan.participant_id, "condition": condition,
                 "question": QUESTIONS[condition], "answers": list(POSITIONS[condition]),
                 "timings_ms": TIMINGS_MS[condition], "trials": trials}
+
+    def handle_error(self, request, client_address) -> None:
+        """One line instead of socketserver's traceback; a browser that went away while we
+        answered (page closed or reloaded) is normal and what it sent is already stored."""
+        kind, error, _ = sys.exc_info()
+        if isinstance(error, ConnectionError):
+            return
+        if os.environ.get("XSL_DEBUG"):
+            traceback.print_exc()
+        self.say(f"internal error on a request from {client_address[0]}: "
+                 f"{kind.__name__}: {error} (set XSL_DEBUG=1 for the traceback)")
 
     def say(self, message: str) -> None:
         print(f"experiment: {message}", file=self.log, flush=True)

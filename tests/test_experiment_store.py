@@ -26,7 +26,7 @@ def _pairs(scenes=SCENES, digest="0" * 64):
 
 @pytest.fixture
 def store(tmp_path):
-    store = ExperimentStore(tmp_path / "answers.sqlite")
+    store = ExperimentStore(tmp_path / "answers.sqlite", durable=False)
     store.sync_stimuli(_pairs())
     yield store
     store.close()
