@@ -1,4 +1,4 @@
 """Subcommands of ``xsl-render``; each module has NAME, HELP, add_arguments() and run()."""
-from . import info
+from . import experiment_analyse, experiment_serve, hotspots, info
 
-COMMANDS = [info]
+COMMANDS = [info, experiment_serve, experiment_analyse, hotspots]

@@ -1,0 +1,72 @@
+"""From stored 2AFC answers to the paper's analysis: counts and chi-square per cell (Table III),
+percent correct with sd (Figs. 13-14), and an audit of the display timings the page measured.
+"""
+from __future__ import annotations
+
+from collections import defaultdict
+
+from .experiment_plan import worst_timing_error_ms
+from .experiment_stats import analyse_cell
+from .experiment_store import AnswerRow
+
+
+def analyse_answers(rows: list[AnswerRow], timing_tolerance_ms: float = 50.0,
+                    exclude_off_timing: bool = False) -> dict:
+    """Analyse every (scene, condition) cell of the answers.
+
+    Parameters
+    ----------
+    rows
+        The stored answers (``experiment_store.read_answers``).
+    timing_tolerance_ms
+        A trial whose measured display durations miss the nominal ones by more than this,
+        or during which the page was hidden, counts as off timing.
+    exclude_off_timing
+        Leave off-timing trials out of the counts (they are always reported).
+
+    Returns
+    -------
+    dict
+        ``cells``: one dict per cell, sorted by scene then condition, with the fields of
+        ``experiment_stats.CellResult``, ``apa`` (the Table III wording) and ``timing``
+        (worst deviation in ms, trials off timing, trials with the page hidden);
+        ``participants``, ``trials``, ``excluded`` and ``timing_tolerance_ms``.
+    """
+    groups: dict[tuple[str, str], list[AnswerRow]] = defaultdict(list)
+    for row in rows:
+        groups[(row.scene, row.condition)].append(row)
+    cells, excluded = [], 0
+    for (scene, condition), answers in sorted(groups.items()):
+        errors = [worst_timing_error_ms(condition, a.durations) for a in answers]
+        off = [e > timing_tolerance_ms or a.page_hidden for a, e in zip(answers, errors)]
+        kept = [a for a, is_off in zip(answers, off) if not (exclude_off_timing and is_off)]
+        excluded += len(answers) - len(kept)
+        timing = {"worst_error_ms": max(errors), "off_timing": sum(off),
+                  "page_hidden": sum(a.page_hidden for a in answers)}
+        if not kept:
+            continue
+        correct = sum(a.correct for a in kept)
+        result = analyse_cell(scene, condition, correct, len(kept) - correct)
+        cells.append({**result.as_dict(), "apa": result.apa(), "timing": timing})
+    return {"cells": cells, "participants": len({row.participant_id for row in rows}),
+            "trials": len(rows), "excluded": excluded, "timing_tolerance_ms": timing_tolerance_ms}
+
+
+def format_report(report: dict) -> str:
+    """The report as a plain-text table."""
+    header = (f"{'scene':<16} {'condition':<13} {'N':>3} {'correct':>7} {'incorrect':>9} "
+              f"{'% correct (sd)':>15}  chi-square")
+    lines = [header, "-" * len(header)]
+    for cell in report["cells"]:
+        percent = f"{cell['percent_correct']:.1f} ({cell['percent_sd']:.1f})"
+        lines.append(f"{cell['scene']:<16} {cell['condition']:<13} {cell['n']:>3} "
+                     f"{cell['correct']:>7} {cell['incorrect']:>9} {percent:>15}  {cell['apa']}")
+    worst = max((c["timing"]["worst_error_ms"] for c in report["cells"]), default=0.0)
+    off = sum(c["timing"]["off_timing"] for c in report["cells"])
+    hidden = sum(c["timing"]["page_hidden"] for c in report["cells"])
+    lines.append("")
+    lines.append(f"{report['participants']} participants, {report['trials']} trials; display "
+                 f"timing: worst deviation {worst:.1f} ms from 4 s / 2 s / 8 s, {off} trials off "
+                 f"by more than {report['timing_tolerance_ms']:g} ms or with the page hidden "
+                 f"({hidden} hidden)" + (f", {report['excluded']} excluded" if report["excluded"] else ""))
+    return "\n".join(lines)

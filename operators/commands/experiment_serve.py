@@ -1,0 +1,72 @@
+"""``xsl-render experiment-serve STIMULI_DIR``: run the paper's 2AFC experiment in a browser.
+
+STIMULI_DIR holds one pair of PNG files per scene, shown pixel for pixel (no scaling)::
+
+    <scene>.gold.png    the gold standard
+    <scene>.test.png    the selective rendering (same size)
+
+Each participant registers (id, age range, corrected vision), is given a condition (by
+default alternating: no reference, reference, ...) and does one trial per scene, in random
+order, with the gold standard's place counterbalanced over participants. Every answer is
+committed to the SQLite database (default STIMULI_DIR/experiment.sqlite) when it is given,
+with the display time stamps the page measured; ``xsl-render experiment-analyse DB``
+analyses it.
+"""
+from __future__ import annotations
+
+import signal
+from pathlib import Path
+
+NAME = "experiment-serve"
+HELP = ("serve the 2AFC experiment of section 6.2 (no reference / reference) on the "
+        "<scene>.gold.png + <scene>.test.png pairs of a folder; answers go to SQLite")
+
+CONDITION_CHOICES = {
+    "alternate": ("no-reference", "reference"),
+    "no-reference": ("no-reference",),
+    "reference": ("reference",),
+}
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("stimuli", metavar="STIMULI_DIR",
+                        help="folder of <scene>.gold.png and <scene>.test.png pairs (same size per pair)")
+    parser.add_argument("--port", type=int, default=8000,
+                        help="TCP port (default 8000; 0 picks a free one)")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1, this machine only)")
+    parser.add_argument("--db", metavar="FILE.sqlite",
+                        help="answers database (default STIMULI_DIR/experiment.sqlite); "
+                             "reuse it to continue an experiment")
+    parser.add_argument("--condition", choices=sorted(CONDITION_CHOICES), default="alternate",
+                        help="alternate: participants alternate between the two conditions "
+                             "(the paper's first experiment); or one condition for everybody")
+
+
+def run(args) -> int:
+    from ...core.errors import InputError
+    from ...core.experiment_stimuli import scan_stimuli
+    from ..experiment_server import start_server
+
+    if not 0 <= args.port <= 65535:
+        raise InputError(f"--port must be 0..65535, not {args.port}")
+    pairs = scan_stimuli(args.stimuli)
+    db_path = Path(args.db) if args.db else Path(args.stimuli) / "experiment.sqlite"
+    server = start_server(pairs, db_path, args.host, args.port, CONDITION_CHOICES[args.condition])
+    server.say(f"{len(pairs)} scenes, condition {args.condition}; answers go to {db_path}")
+    server.say(f"open {server.url} in the participant's browser (Ctrl-C stops)")
+    # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly.
+    previous = signal.signal(signal.SIGTERM, _stop)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        server.say("stopped; every answer given is in the database")
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        server.server_close()
+        server.store.close()
+    return 0
+
+
+def _stop(signum, frame):
+    raise KeyboardInterrupt
