@@ -34,3 +34,27 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
 
 def write_json(path: str | os.PathLike, data) -> Path:
     return write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def check_output_path(path: str | os.PathLike, suffix: str) -> Path:
+    """Check, before any work is done, that ``path`` can be written as a ``suffix`` file.
+
+    Raises InputError (one line) when the name has another extension, names a folder, or
+    its folder cannot be created or written. The folder itself is created at write time
+    (:func:`atomic_path`), so nothing is left behind by a command that fails later.
+    """
+    from .errors import InputError
+
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder, not a file")
+    if path.suffix.lower() != suffix.lower():
+        raise InputError(f"output {path} must be a {suffix} file")
+    folder = path.parent.absolute()
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InputError(f"cannot write {path}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write {path}: folder {folder} is not writable")
+    return path

@@ -55,6 +55,18 @@ def image_channel_names(path: str | os.PathLike) -> list[str]:
         image.close()
 
 
+def image_is_float(path: str | os.PathLike) -> bool:
+    """True when the file stores floating-point pixels (OpenEXR, float TIFF, Radiance HDR):
+    by convention scene-linear, where 8- and 16-bit integer files are display-referred."""
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        raise InputError(f"cannot read image {path}")
+    try:
+        return image.spec().format.basetype in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE)
+    finally:
+        image.close()
+
+
 def _as_hwc(array: np.ndarray) -> np.ndarray:
     array = np.asarray(array)
     if array.ndim == 2:

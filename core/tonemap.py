@@ -1,0 +1,96 @@
+"""One tone map from scene-linear HDR renders to display-referred [0, 1] images.
+
+The saliency model (Itti et al. 1998) and the image metrics were built for images as a
+display shows them, not for scene radiance, so every HDR render goes through this one
+function before either sees it.
+
+The operator is the global photographic tone reproduction of Reinhard, Stark, Shirley and
+Ferwerda, "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002, section 3:
+
+- ``L̄_w = exp(mean(log(δ + L_w)))``, the log-average ("key") luminance (their eq. 1);
+- ``L = (a / L̄_w) L_w`` with the middle-grey key ``a = 0.18`` (eq. 2);
+- ``L_d = L / (1 + L)`` (eq. 3);
+- each colour channel scaled by ``L_d / L_w`` (hue and saturation kept), clipped to [0, 1]
+  and encoded with the sRGB transfer curve, the encoding of an 8-bit image on a display.
+
+Why this one: Cycles' absolute radiance depends on light strengths that differ by orders
+of magnitude between scenes (a sunlit road, a fog lamp at night), so a fixed exposure would
+leave one scene black and another white. Normalising the log-average to middle grey makes
+the exposure follow the scene, as a camera's auto-exposure does, and ``L / (1 + L)``
+compresses visible light sources and their glow smoothly instead of clipping them to a flat
+white blob (which would erase the very structure the saliency model reacts to). It is
+global (no local contrast of its own that could create or hide salient features),
+deterministic and has no free parameter beyond the standard key. Equation 3 rather than the
+white-point variant (eq. 4) is used because the white point would be set by the single
+brightest pixel, which a noisy low-sample render (fireflies) makes unstable.
+
+Luminance uses the Rec. 709 weights of Blender's default scene-linear space.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .imageio import linear_to_srgb
+
+#: The key a of Reinhard et al.: the log-average luminance is mapped to middle grey.
+KEY = 0.18
+
+#: δ of Reinhard's eq. 1, in scene-linear units: keeps black pixels from sending the
+#: log-average to zero while being far below any lit surface.
+LOG_DELTA = 1e-4
+
+#: Rec. 709 / sRGB luminance weights (Blender's default scene-linear primaries).
+LUMINANCE_WEIGHTS = np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+
+
+def luminance(hdr_rgb: np.ndarray) -> np.ndarray:
+    """Rec. 709 luminance of a ``(..., 3)`` scene-linear image (negatives taken as 0)."""
+    return np.maximum(np.asarray(hdr_rgb, dtype=np.float32), 0.0) @ LUMINANCE_WEIGHTS
+
+
+def log_average_luminance(hdr_rgb: np.ndarray) -> float:
+    """The key luminance ``L̄_w`` of Reinhard et al. (2002), eq. 1.
+
+    Pass it to :func:`tonemap` to expose several images alike (a reference and a test
+    render compared by a metric must not each get their own exposure).
+    """
+    rgb = _checked(hdr_rgb)
+    return float(np.exp(np.mean(np.log(LOG_DELTA + luminance(rgb).astype(np.float64)))))
+
+
+def tonemap(hdr_rgb: np.ndarray, log_average: float | None = None) -> np.ndarray:
+    """Scene-linear RGB to display-referred, sRGB-encoded RGB in [0, 1].
+
+    Parameters
+    ----------
+    hdr_rgb : ndarray, shape (..., 3)
+        Scene-linear colour (e.g. a Cycles render), finite. Negative values (denoiser
+        undershoot) count as 0.
+    log_average : float, optional
+        The key luminance to expose for; by default this image's own
+        (:func:`log_average_luminance`).
+
+    Returns
+    -------
+    ndarray, float32, same shape
+        Display-referred values in [0, 1]. A black image stays black.
+    """
+    rgb = np.maximum(_checked(hdr_rgb), 0.0)
+    key = log_average_luminance(rgb) if log_average is None else float(log_average)
+    if not key > 0.0 or not np.isfinite(key):
+        raise ValueError(f"the key luminance must be positive and finite, got {log_average}")
+    world = luminance(rgb)
+    scaled = (KEY / key) * world                                   # eq. 2
+    display = scaled / (1.0 + scaled)                              # eq. 3
+    ratio = np.zeros_like(world)
+    np.divide(display, world, out=ratio, where=world > 0.0)
+    return linear_to_srgb(np.clip(rgb * ratio[..., None], 0.0, 1.0))
+
+
+def _checked(hdr_rgb: np.ndarray) -> np.ndarray:
+    rgb = np.asarray(hdr_rgb, dtype=np.float32)
+    if rgb.ndim < 1 or rgb.shape[-1] != 3:
+        raise ValueError(f"expected RGB values on the last axis, got shape {rgb.shape}")
+    if not np.isfinite(rgb).all():
+        raise ValueError("the image has NaN or infinite values")
+    return rgb
