@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import time
+from importlib.metadata import version
 
 import numpy as np
 from scipy.special import ndtr, ndtri
@@ -88,7 +89,7 @@ def vdp_metric(reference_display: np.ndarray, test_display: np.ndarray) -> Metri
     if reason:
         return MetricResult.skip("vdp", reason)
     start = time.perf_counter()
-    pycvvdp, torch = _load_cvvdp()
+    _, torch = _load_cvvdp()
     metric = _metric()
     reference = np.ascontiguousarray(reference_display, dtype=np.float32)
     test = np.ascontiguousarray(test_display, dtype=np.float32)
@@ -102,8 +103,6 @@ def vdp_metric(reference_display: np.ndarray, test_display: np.ndarray) -> Metri
     if not np.isfinite(heatmap).all() or not np.isfinite(float(jod)):
         return MetricResult.skip("vdp", "ColorVideoVDP returned NaN or Inf for these images")
     probability = detection_probability(10.0 * heatmap)
-    from importlib.metadata import version
-
     extra = {"jod": float(jod), "display": VDP_DISPLAY, "ppd": float(metric.pix_per_deg),
              "error_jod_drop": jod_drop_at(VDP_ERROR_PROBABILITY),
              "cvvdp_version": version("cvvdp"), "seconds": time.perf_counter() - start}
