@@ -1,4 +1,4 @@
 """Subcommands of ``xsl-render``; each module has NAME, HELP, add_arguments() and run()."""
-from . import experiment_analyse, experiment_serve, hotspots, info, saliency
+from . import compare, experiment_analyse, experiment_serve, hotspots, info, saliency
 
-COMMANDS = [info, saliency, experiment_serve, experiment_analyse, hotspots]
+COMMANDS = [info, saliency, compare, experiment_serve, experiment_analyse, hotspots]

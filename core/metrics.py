@@ -1,0 +1,211 @@
+"""Difference metrics between a gold-standard render and a selective one (paper section 6.1).
+
+The paper compares images with MSE and Daly's VDP and reports, per metric, the *average
+pixel error* (the per-pixel difference map averaged over the image, in %) and the
+*percentage of error pixels* (pixels whose difference passes a threshold). This module
+computes both numbers, and the per-pixel map, for
+
+- MSE on display-referred images (:func:`mse_metric`),
+- NVIDIA's FLIP, today's evaluator for rendered images (:func:`flip_metric`),
+- ColorVideoVDP, the maintained successor of Daly's VDP (:mod:`.vdp`, optional).
+
+All metrics see the same observer (:data:`PIXELS_PER_DEGREE`) and, where they compare
+display values, the same display transform (:func:`display_referred`).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .image_pair import ImagePair
+from .imageio import linear_to_srgb
+
+# ---------------------------------------------------------------------------------------
+# The observer. ColorVideoVDP's 'standard_fhd' display (a 24-inch 1920x1080 monitor seen
+# from 0.6 m) is the one VDP uses; FLIP gets the same geometry so both metrics judge the
+# same viewer. It is close to the paper's own experiment: a 17-inch 1280x1024 monitor seen
+# from 60 cm, about 40 pixels per degree.
+VIEWING_DISTANCE_M = 0.6
+DISPLAY_WIDTH_PX = 1920
+DISPLAY_WIDTH_M = 24 * 0.0254 * 16 / math.hypot(16, 9)   # width of a 24-inch 16:9 screen
+PIXELS_PER_DEGREE = VIEWING_DISTANCE_M * DISPLAY_WIDTH_PX / DISPLAY_WIDTH_M * math.pi / 180
+
+# ---------------------------------------------------------------------------------------
+# Error-pixel thresholds. MSE and FLIP have no threshold of their own, so both use one
+# just-noticeable colour difference, Delta E*ab = 2.3 (Sharma 2003), measured on flat
+# mid-grey patches: L* = 50 against L* = 52.3.
+JND_DELTA_E = 2.3
+JND_LIGHTNESS = 50.0
+
+
+def srgb_of_lightness(lightness: float) -> float:
+    """The display-encoded sRGB value of a grey of CIE lightness L* (D65 white)."""
+    luminance = ((lightness + 16) / 116) ** 3 if lightness > 8 else lightness / 903.3
+    return float(linear_to_srgb(np.float32(luminance)))
+
+
+# A mid grey one JND lighter is ~5.8 8-bit levels higher; each image may also be off by
+# half a level from 8-bit rounding, so one or two levels of difference are not an error.
+MSE_ERROR_THRESHOLD = (srgb_of_lightness(JND_LIGHTNESS + JND_DELTA_E)
+                       - srgb_of_lightness(JND_LIGHTNESS)) ** 2
+# FLIP's value for the same pair of flat patches at PIXELS_PER_DEGREE (flip-evaluator 1.7;
+# tests/test_metrics.py recomputes it). Flat patches have no edges, so this is FLIP's
+# colour term alone.
+FLIP_ERROR_THRESHOLD = 0.103
+
+# The display transform: fixed exposure, clamp, sRGB OETF (see display_referred).
+DISPLAY_EXPOSURE_EV = 0.0
+
+
+@dataclass
+class MetricResult:
+    """One metric's verdict on an image pair.
+
+    Attributes
+    ----------
+    name : "mse", "flip" or "vdp".
+    per_pixel : (H, W) float32 difference map, or None when the metric was skipped.
+    average_error_percent : mean of ``per_pixel`` in % (the paper's Table I).
+    error_pixel_percent : % of pixels whose ``per_pixel`` exceeds ``threshold`` (Table II).
+    threshold : the error-pixel threshold on ``per_pixel``.
+    heatmap_full_scale : the ``per_pixel`` value drawn at the top of the heatmap colours.
+    extra : metric-specific numbers (mean FLIP, JOD, exposures, seconds, ...).
+    skipped : why the metric did not run (None when it did). Never a silent zero.
+    """
+
+    name: str
+    per_pixel: np.ndarray | None
+    average_error_percent: float | None
+    error_pixel_percent: float | None
+    threshold: float | None
+    heatmap_full_scale: float = 1.0
+    extra: dict = field(default_factory=dict)
+    skipped: str | None = None
+
+    @classmethod
+    def from_map(cls, name: str, per_pixel: np.ndarray, threshold: float,
+                 heatmap_full_scale: float = 1.0, extra: dict | None = None) -> "MetricResult":
+        per_pixel = np.ascontiguousarray(per_pixel, dtype=np.float32)
+        return cls(name=name, per_pixel=per_pixel,
+                   average_error_percent=100.0 * float(per_pixel.mean(dtype=np.float64)),
+                   error_pixel_percent=100.0 * float(np.count_nonzero(per_pixel > threshold))
+                   / per_pixel.size,
+                   threshold=float(threshold), heatmap_full_scale=float(heatmap_full_scale),
+                   extra=dict(extra or {}))
+
+    @classmethod
+    def skip(cls, name: str, reason: str) -> "MetricResult":
+        return cls(name=name, per_pixel=None, average_error_percent=None,
+                   error_pixel_percent=None, threshold=None, skipped=reason)
+
+    def summary(self) -> dict:
+        """All numbers, JSON-ready (no per-pixel map)."""
+        return {"average_error_percent": self.average_error_percent,
+                "error_pixel_percent": self.error_pixel_percent,
+                "threshold": self.threshold, "skipped": self.skipped, **self.extra}
+
+
+def display_referred(hdr_rgb: np.ndarray, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> np.ndarray:
+    """Scene-linear RGB -> display-referred sRGB in [0, 1], float32.
+
+    The transform is ``srgb_oetf(clip(hdr_rgb * 2**exposure_ev, 0, 1))``: a fixed exposure,
+    a hard clamp, and the sRGB transfer curve (IEC 61966-2-1). With the default exposure
+    of 0 EV it is Blender's "Standard" view transform, i.e. what Blender shows for a
+    render that uses it. It has no image statistics in it, so two renders of the same
+    scene (gold and selective) go through exactly the same curve and a difference in the
+    output is a difference in the renders, never in the tone map.
+
+    Parameters
+    ----------
+    hdr_rgb : (H, W, C) scene-linear radiance (Rec.709 primaries, as Cycles writes).
+    exposure_ev : exposure in stops applied before the clamp.
+    """
+    scaled = np.asarray(hdr_rgb, dtype=np.float32) * np.float32(2.0 ** exposure_ev)
+    return linear_to_srgb(scaled)
+
+
+def display_transform_description(hdr: bool, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> str:
+    """One line saying how the images were turned into display values."""
+    if not hdr:
+        return "none: LDR inputs are display-encoded sRGB already"
+    return (f"exposure {exposure_ev:+g} EV, clamp to [0, 1], sRGB OETF "
+            "(Blender's Standard view transform)")
+
+
+def display_pair(pair: ImagePair, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> tuple[np.ndarray, np.ndarray]:
+    """The two images as a viewer's display shows them: HDR through :func:`display_referred`,
+    LDR as stored (already display-encoded)."""
+    if pair.hdr:
+        return display_referred(pair.reference, exposure_ev), display_referred(pair.test, exposure_ev)
+    return pair.reference, pair.test
+
+
+def mse_metric(reference_display: np.ndarray, test_display: np.ndarray) -> MetricResult:
+    """Per-pixel squared error of display-referred images, averaged over R, G and B.
+
+    Values are in [0, 1] (display values are). Average pixel error = 100 x mean; an error
+    pixel has squared error > :data:`MSE_ERROR_THRESHOLD` (one JND on mid grey, ~5.8
+    8-bit levels). The heatmap is scaled so that this threshold sits at the colour of
+    FLIP's error threshold.
+    """
+    start = time.perf_counter()
+    difference = reference_display.astype(np.float32) - test_display.astype(np.float32)
+    squared = np.mean(difference * difference, axis=2)
+    return MetricResult.from_map(
+        "mse", squared, MSE_ERROR_THRESHOLD,
+        heatmap_full_scale=MSE_ERROR_THRESHOLD / FLIP_ERROR_THRESHOLD,
+        extra={"mse": float(squared.mean(dtype=np.float64)),
+               "seconds": time.perf_counter() - start})
+
+
+def flip_metric(reference: np.ndarray, test: np.ndarray, hdr: bool,
+                pixels_per_degree: float = PIXELS_PER_DEGREE) -> MetricResult:
+    """FLIP (flip-evaluator): LDR-FLIP on display-encoded images, HDR-FLIP on linear ones.
+
+    HDR-FLIP tone-maps both images itself over a range of exposures chosen from the
+    reference (FLIP's own method, ACES tone mapper) and keeps the worst LDR-FLIP per pixel;
+    negative radiance (not displayable) is clamped to 0 first, as FLIP requires.
+    Average pixel error = 100 x mean FLIP; error pixel: FLIP > :data:`FLIP_ERROR_THRESHOLD`.
+    """
+    import flip_evaluator
+
+    start = time.perf_counter()
+    mode = "HDR" if hdr else "LDR"
+    ref = np.ascontiguousarray(np.maximum(reference, 0.0) if hdr else reference, dtype=np.float32)
+    tst = np.ascontiguousarray(np.maximum(test, 0.0) if hdr else test, dtype=np.float32)
+    flip_map, mean_flip, used = flip_evaluator.evaluate(
+        ref, tst, mode, applyMagma=False, computeMeanError=True,
+        parameters={"ppd": float(pixels_per_degree)})
+    extra = {"mode": f"{mode}-FLIP", "mean_flip": float(mean_flip), "ppd": float(used["ppd"])}
+    if hdr:
+        extra.update(start_exposure=float(used["startExposure"]),
+                     stop_exposure=float(used["stopExposure"]),
+                     num_exposures=int(used["numExposures"]), tonemapper=str(used["tonemapper"]))
+    extra["seconds"] = time.perf_counter() - start
+    return MetricResult.from_map("flip", flip_map[:, :, 0], FLIP_ERROR_THRESHOLD, extra=extra)
+
+
+def compare_images(pair: ImagePair, exposure_ev: float = DISPLAY_EXPOSURE_EV,
+                   vdp: bool = True) -> dict[str, MetricResult]:
+    """All metrics on one pair: ``{"mse": ..., "flip": ..., "vdp": ...}``.
+
+    MSE and VDP compare display-referred images (:func:`display_pair`). FLIP compares HDR
+    renders with HDR-FLIP and LDR images with LDR-FLIP; for HDR renders the LDR-FLIP mean
+    of the display-referred pair is kept too (``extra["mean_ldr_flip_display"]``), the FLIP
+    figure under the same display transform as the other metrics. ``vdp=False`` reports VDP
+    as skipped (it is the slow one).
+    """
+    from .vdp import vdp_metric
+
+    ref_display, test_display = display_pair(pair, exposure_ev)
+    results = {"mse": mse_metric(ref_display, test_display),
+               "flip": flip_metric(pair.reference, pair.test, pair.hdr)}
+    if pair.hdr:
+        ldr_flip = flip_metric(ref_display, test_display, hdr=False)
+        results["flip"].extra["mean_ldr_flip_display"] = ldr_flip.extra["mean_flip"]
+    results["vdp"] = (vdp_metric(ref_display, test_display) if vdp
+                      else MetricResult.skip("vdp", "not requested (--no-vdp)"))
+    return results

@@ -1,0 +1,109 @@
+"""The VDP metric of the paper (section 6.1), with ColorVideoVDP as today's VDP.
+
+Sundstedt et al. used Daly's VDP: per pixel, the probability P that a viewer detects a
+difference, with P > 0.75 counting as an error pixel. ColorVideoVDP (PyPI ``cvvdp``,
+Mantiuk et al. 2024) is the maintained successor of that family of metrics. It is an
+*optional* extra because it needs PyTorch (from PyPI on Linux that brings the CUDA
+libraries, gigabytes); when it is missing the result says so and why, never a zero.
+
+From JOD to a probability of detection
+--------------------------------------
+ColorVideoVDP scores in JOD (just-objectionable differences): 10 is no difference, and a
+difference of 1 JOD means 75% of observers pick the better image in a two-alternative
+forced choice. Its ``raw`` heatmap holds, per pixel, ``(10 - JOD)/10``, so the per-pixel
+JOD drop is ``d = 10 * heatmap``. On the JOD (Thurstone) scale a drop of ``d`` is chosen
+with probability ``Phi(z75 * d)``, ``z75 = Phi^-1(0.75)``. Removing lucky guesses (a
+viewer who sees no difference still picks right half the time) gives the probability of
+detection the paper thresholds::
+
+    P = 2 * Phi(z75 * d) - 1        (0 for identical pixels, 0.5 at 1 JOD)
+
+so an error pixel, P > 0.75, is a pixel whose predicted drop exceeds about 1.71 JOD.
+"""
+from __future__ import annotations
+
+import functools
+import time
+from importlib.metadata import version
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from .metrics import MetricResult
+
+# The display model ColorVideoVDP assumes: a 24-inch 1920x1080 SDR monitor, 200 cd/m^2
+# peak, 1000:1 contrast, office light (250 lux), seen from 0.6 m (about 38 pixels per
+# degree; FLIP uses the same geometry, see metrics.PIXELS_PER_DEGREE).
+VDP_DISPLAY = "standard_fhd"
+# The paper's threshold on the probability of detection (Myszkowski 1998).
+VDP_ERROR_PROBABILITY = 0.75
+_Z75 = float(ndtri(0.75))
+
+VDP_INSTALL_HINT = "see the optional 'vdp' pins in requirements.lock to install it"
+
+
+def detection_probability(jod_drop: np.ndarray) -> np.ndarray:
+    """Per-pixel probability of detection from a per-pixel JOD drop (see module notes)."""
+    drop = np.maximum(np.asarray(jod_drop, dtype=np.float64), 0.0)
+    return (2.0 * ndtr(_Z75 * drop) - 1.0).astype(np.float32)
+
+
+def jod_drop_at(probability: float) -> float:
+    """The per-pixel JOD drop at which :func:`detection_probability` reaches ``probability``."""
+    return float(ndtri((1.0 + probability) / 2.0) / _Z75)
+
+
+def vdp_unavailable_reason() -> str | None:
+    """None when ColorVideoVDP can run here, else one line saying why not."""
+    try:
+        _load_cvvdp()
+    except ImportError as error:
+        return f"ColorVideoVDP (cvvdp) is not installed ({error}); {VDP_INSTALL_HINT}"
+    return None
+
+
+@functools.cache
+def _load_cvvdp():
+    import pycvvdp  # noqa: F401  (imports torch; seconds, so only once)
+    import torch
+
+    return pycvvdp, torch
+
+
+@functools.cache
+def _metric():
+    pycvvdp, torch = _load_cvvdp()
+    return pycvvdp.cvvdp(display_name=VDP_DISPLAY, heatmap="raw",
+                         device=torch.device("cpu"), quiet=True)
+
+
+def vdp_metric(reference_display: np.ndarray, test_display: np.ndarray) -> MetricResult:
+    """ColorVideoVDP on two display-encoded sRGB images ``(H, W, 3)`` in [0, 1].
+
+    Returns the probability-of-detection map, average pixel error = 100 x mean P,
+    error pixels: P > 0.75, and ``extra``: ``jod`` (the image's JOD score), the display
+    model, its pixels per degree, the cvvdp version and seconds. Skipped, with the reason,
+    when ColorVideoVDP is not installed or refuses the images.
+    """
+    reason = vdp_unavailable_reason()
+    if reason:
+        return MetricResult.skip("vdp", reason)
+    start = time.perf_counter()
+    _, torch = _load_cvvdp()
+    metric = _metric()
+    reference = np.ascontiguousarray(reference_display, dtype=np.float32)
+    test = np.ascontiguousarray(test_display, dtype=np.float32)
+    try:
+        with torch.no_grad():
+            jod, stats = metric.predict(test, reference, dim_order="HWC")
+    except (RuntimeError, ValueError) as error:     # e.g. an image too small for its pyramid
+        message = str(error).strip().splitlines()
+        return MetricResult.skip("vdp", f"ColorVideoVDP failed: {message[0] if message else type(error).__name__}")
+    heatmap = stats["heatmap"].float().numpy().reshape(reference.shape[:2])
+    if not np.isfinite(heatmap).all() or not np.isfinite(float(jod)):
+        return MetricResult.skip("vdp", "ColorVideoVDP returned NaN or Inf for these images")
+    probability = detection_probability(10.0 * heatmap)
+    extra = {"jod": float(jod), "display": VDP_DISPLAY, "ppd": float(metric.pix_per_deg),
+             "error_jod_drop": jod_drop_at(VDP_ERROR_PROBABILITY),
+             "cvvdp_version": version("cvvdp"), "seconds": time.perf_counter() - start}
+    return MetricResult.from_map("vdp", probability, VDP_ERROR_PROBABILITY, extra=extra)

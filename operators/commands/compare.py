@@ -1,0 +1,89 @@
+"""``xsl-render compare REF TEST``: MSE, FLIP and VDP between a reference and a test image.
+
+Prints one line per metric: the paper's average pixel error (%) and percentage of error
+pixels, the threshold that makes a pixel an error, and the metric's own score (MSE, mean
+FLIP, ColorVideoVDP's JOD). ``--json`` writes every number, ``--heatmap`` the FLIP map as a
+magma PNG, ``--heatmap-dir`` the maps of all metrics (mse.png, flip.png, vdp.png).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+NAME = "compare"
+HELP = ("difference metrics (MSE, FLIP, VDP) between a reference and a test image: "
+        "average pixel error, error pixels, heatmaps")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("reference", metavar="REF", help="reference image (gold standard): .exr, .png or .jpg")
+    parser.add_argument("test", metavar="TEST", help="test image of the same size and kind as REF")
+    parser.add_argument("--json", metavar="FILE", help="write all numbers to this JSON file")
+    parser.add_argument("--heatmap", metavar="FILE.png", help="write the FLIP difference map as a magma PNG")
+    parser.add_argument("--heatmap-dir", metavar="DIR",
+                        help="write every metric's map as DIR/mse.png, flip.png, vdp.png (magma)")
+    parser.add_argument("--exposure", type=float, default=0.0, metavar="EV",
+                        help="exposure in stops of the display transform for EXR inputs (default 0: "
+                             "Blender's Standard view)")
+    parser.add_argument("--no-vdp", action="store_true",
+                        help="skip ColorVideoVDP (the slow metric; it is optional anyway)")
+
+
+def run(args) -> int:
+    from ...core.errors import InputError
+    from ...core.files import write_json
+    from ...core.heatmap import write_heatmap
+    from ...core.image_pair import read_pair
+    from ...core.metrics import compare_images, display_transform_description
+
+    if not math.isfinite(args.exposure):
+        raise InputError(f"--exposure must be a finite number of stops, got {args.exposure}")
+    if args.heatmap and Path(args.heatmap).suffix.lower() != ".png":
+        raise InputError(f"--heatmap must name a .png file, got {args.heatmap}")
+    pair = read_pair(args.reference, args.test)
+    results = compare_images(pair, exposure_ev=args.exposure, vdp=not args.no_vdp)
+
+    written = []
+    if args.heatmap:
+        flip = results["flip"]
+        written.append(write_heatmap(args.heatmap, flip.per_pixel, flip.heatmap_full_scale))
+    if args.heatmap_dir:
+        for name, result in results.items():
+            if result.per_pixel is not None:
+                written.append(write_heatmap(Path(args.heatmap_dir) / f"{name}.png",
+                                             result.per_pixel, result.heatmap_full_scale))
+    if args.json:
+        write_json(args.json, {
+            "reference": str(args.reference), "test": str(args.test),
+            "dynamic_range": "HDR" if pair.hdr else "LDR",
+            "width": pair.width, "height": pair.height,
+            "display_transform": display_transform_description(pair.hdr, args.exposure),
+            "metrics": {name: result.summary() for name, result in results.items()},
+            "heatmaps": [str(path) for path in written]})
+
+    print(format_table(results, pair.hdr))
+    for path in written:
+        print(f"heatmap  {path}")
+    return 0
+
+
+def format_table(results: dict, hdr: bool) -> str:
+    """One line per metric; a skipped metric says why."""
+    lines = [f"{'metric':<6} {'avg error %':>12} {'error px %':>11}  {'error pixel if':<18} score"]
+    for name, result in results.items():
+        label = name.upper()
+        if result.skipped:
+            lines.append(f"{label:<6} skipped: {result.skipped}")
+            continue
+        extra = result.extra
+        if name == "mse":
+            rule, score = f"sq. err > {result.threshold:.2e}", f"MSE {extra['mse']:.3g}"
+        elif name == "flip":
+            rule, score = f"FLIP > {result.threshold:g}", f"mean FLIP {extra['mean_flip']:.4f} ({extra['mode']})"
+        else:
+            rule, score = f"P > {result.threshold:g}", f"JOD {extra['jod']:.3f} ({extra['display']})"
+        lines.append(f"{label:<6} {result.average_error_percent:>12.4f} "
+                     f"{result.error_pixel_percent:>11.4f}  {rule:<18} {score}")
+    if hdr:
+        lines.append("(EXR: MSE and VDP compare the display-referred images, FLIP uses HDR-FLIP)")
+    return "\n".join(lines)
