@@ -10,7 +10,7 @@ computes both numbers, and the per-pixel map, for
 - ColorVideoVDP, the maintained successor of Daly's VDP (:mod:`.vdp`, optional).
 
 All metrics see the same observer (:data:`PIXELS_PER_DEGREE`) and, where they compare
-display values, the same display transform (:func:`display_referred`).
+display values, the same display transform (:func:`standard_view`).
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import numpy as np
 
 from .image_pair import ImagePair
 from .imageio import linear_to_srgb
+from .tonemap import standard_view
 
 # ---------------------------------------------------------------------------------------
 # The observer. ColorVideoVDP's 'standard_fhd' display (a 24-inch 1920x1080 monitor seen
@@ -56,7 +57,7 @@ MSE_ERROR_THRESHOLD = (srgb_of_lightness(JND_LIGHTNESS + JND_DELTA_E)
 # colour term alone.
 FLIP_ERROR_THRESHOLD = 0.103
 
-# The display transform: fixed exposure, clamp, sRGB OETF (see display_referred).
+# The display transform: fixed exposure, clamp, sRGB OETF (see standard_view).
 DISPLAY_EXPOSURE_EV = 0.0
 
 
@@ -108,25 +109,6 @@ class MetricResult:
                 "threshold": self.threshold, "skipped": self.skipped, **self.extra}
 
 
-def display_referred(hdr_rgb: np.ndarray, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> np.ndarray:
-    """Scene-linear RGB -> display-referred sRGB in [0, 1], float32.
-
-    The transform is ``srgb_oetf(clip(hdr_rgb * 2**exposure_ev, 0, 1))``: a fixed exposure,
-    a hard clamp, and the sRGB transfer curve (IEC 61966-2-1). With the default exposure
-    of 0 EV it is Blender's "Standard" view transform, i.e. what Blender shows for a
-    render that uses it. It has no image statistics in it, so two renders of the same
-    scene (gold and selective) go through exactly the same curve and a difference in the
-    output is a difference in the renders, never in the tone map.
-
-    Parameters
-    ----------
-    hdr_rgb : (H, W, C) scene-linear radiance (Rec.709 primaries, as Cycles writes).
-    exposure_ev : exposure in stops applied before the clamp.
-    """
-    scaled = np.asarray(hdr_rgb, dtype=np.float32) * np.float32(2.0 ** exposure_ev)
-    return linear_to_srgb(scaled)
-
-
 def display_transform_description(hdr: bool, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> str:
     """One line saying how the images were turned into display values."""
     if not hdr:
@@ -136,10 +118,10 @@ def display_transform_description(hdr: bool, exposure_ev: float = DISPLAY_EXPOSU
 
 
 def display_pair(pair: ImagePair, exposure_ev: float = DISPLAY_EXPOSURE_EV) -> tuple[np.ndarray, np.ndarray]:
-    """The two images as a viewer's display shows them: HDR through :func:`display_referred`,
+    """The two images as a viewer's display shows them: HDR through :func:`standard_view`,
     LDR as stored (already display-encoded)."""
     if pair.hdr:
-        return display_referred(pair.reference, exposure_ev), display_referred(pair.test, exposure_ev)
+        return standard_view(pair.reference, exposure_ev), standard_view(pair.test, exposure_ev)
     return pair.reference, pair.test
 
 

@@ -1,10 +1,16 @@
-"""One tone map from scene-linear HDR renders to display-referred [0, 1] images.
+"""Tone maps from scene-linear HDR renders to display-referred [0, 1] images.
 
 The saliency model (Itti et al. 1998) and the image metrics were built for images as a
-display shows them, not for scene radiance, so every HDR render goes through this one
-function before either sees it.
+display shows them, not for scene radiance. Two transforms, for two different questions:
 
-The operator is the global photographic tone reproduction of Reinhard, Stark, Shirley and
+- :func:`tonemap` (saliency): *what would catch the eye in this scene?* The exposure must
+  follow the scene, whatever its absolute brightness, so it is scene-adaptive (below).
+- :func:`standard_view` (metrics, shared by MSE, FLIP and VDP): *would a viewer see a
+  difference between two renders?* Both renders must go through exactly the same fixed
+  curve, the one Blender itself shows them with (the "Standard" view transform), so a
+  difference in the output is a difference in the renders, never in the tone map.
+
+The saliency operator is the global photographic tone reproduction of Reinhard, Stark, Shirley and
 Ferwerda, "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002, section 3:
 
 - ``L̄_w = exp(mean(log(δ + L_w)))``, the log-average ("key") luminance (their eq. 1);
@@ -94,3 +100,22 @@ def _checked(hdr_rgb: np.ndarray) -> np.ndarray:
     if not np.isfinite(rgb).all():
         raise ValueError("the image has NaN or infinite values")
     return rgb
+
+
+def standard_view(hdr_rgb: np.ndarray, exposure_ev: float = 0.0) -> np.ndarray:
+    """Scene-linear RGB -> display-referred sRGB in [0, 1], float32.
+
+    The transform is ``srgb_oetf(clip(hdr_rgb * 2**exposure_ev, 0, 1))``: a fixed exposure,
+    a hard clamp, and the sRGB transfer curve (IEC 61966-2-1). With the default exposure
+    of 0 EV it is Blender's "Standard" view transform, i.e. what Blender shows for a
+    render that uses it. It has no image statistics in it, so two renders of the same
+    scene (gold and selective) go through exactly the same curve and a difference in the
+    output is a difference in the renders, never in the tone map.
+
+    Parameters
+    ----------
+    hdr_rgb : (H, W, C) scene-linear radiance (Rec.709 primaries, as Cycles writes).
+    exposure_ev : exposure in stops applied before the clamp.
+    """
+    scaled = np.asarray(hdr_rgb, dtype=np.float32) * np.float32(2.0 ** exposure_ev)
+    return linear_to_srgb(scaled)

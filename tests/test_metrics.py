@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from xsl_render.core import metrics, vdp
+from xsl_render.core.tonemap import standard_view
 from xsl_render.core.errors import InputError
 from xsl_render.core.heatmap import MAGMA, colourise, write_heatmap
 from xsl_render.core.image_pair import as_rgb, check_pair, read_pair
@@ -50,16 +51,16 @@ METRICS = ["mse", "flip", pytest.param("vdp", marks=needs_vdp)]
     (0.0, 0.0), (1.0, 1.0), (4.0, 1.0), (-0.5, 0.0),
     (0.0031308, 0.04045), (0.18, 0.4614), (0.5, 0.7354),
 ])
-def test_display_referred_is_clamp_and_srgb(linear, expected):
-    out = metrics.display_referred(np.full((1, 1, 3), linear, np.float32))
+def test_standard_view_is_clamp_and_srgb(linear, expected):
+    out = standard_view(np.full((1, 1, 3), linear, np.float32))
     assert out.dtype == np.float32
     assert out[0, 0, 0] == pytest.approx(expected, abs=2e-4)
 
 
-def test_display_referred_exposure_is_a_scale_in_stops():
+def test_standard_view_exposure_is_a_scale_in_stops():
     image = scene_like()
-    np.testing.assert_allclose(metrics.display_referred(image, exposure_ev=1.0),
-                               metrics.display_referred(image * 2.0), atol=1e-6)
+    np.testing.assert_allclose(standard_view(image, exposure_ev=1.0),
+                               standard_view(image * 2.0), atol=1e-6)
 
 
 def test_ldr_pairs_skip_the_display_transform():
