@@ -1,0 +1,55 @@
+"""XS and XSL combinations (sections 4.3, 4.5)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from xsl_render.core.director import combine, to_unit_range, xs_map, xsl_map
+from xsl_render.core.errors import InputError
+
+rng = np.random.default_rng(7)
+X = rng.uniform(0, 1, (9, 16)).astype(np.float32)
+S = rng.uniform(0, 1, (9, 16)).astype(np.float32)
+L = rng.uniform(0, 1, (9, 16)).astype(np.float32)
+
+
+def test_paper_defaults_are_the_mean():
+    np.testing.assert_allclose(xs_map(X, S), 0.5 * X + 0.5 * S, rtol=1e-6)
+
+
+def test_xsl_degenerates_to_its_inputs_bit_for_bit():
+    xs = xs_map(X, S)
+    assert np.array_equal(xsl_map(xs, L, 1.0, 0.0, "add"), xs)
+    assert np.array_equal(xsl_map(xs, L, 0.0, 1.0, "add"), L)
+    assert np.array_equal(xs_map(X, S, 1.0, 0.0, "multiply"), X)
+
+
+@pytest.mark.parametrize("op", ["add", "multiply"])
+@pytest.mark.parametrize("weights", [(0.5, 0.5), (1.0, 1.0), (0.2, 3.0)])
+def test_results_stay_in_unit_range(op, weights):
+    out = combine(X * 7, S, *weights, op)
+    assert out.dtype == np.float32 and out.min() >= 0 and out.max() <= 1
+
+
+def test_multiply_is_saliency_modulated_by_extinction():
+    np.testing.assert_allclose(xs_map(X, S, 1.0, 1.0, "multiply"), X * S, rtol=1e-6)
+
+
+def test_maps_already_in_unit_range_are_not_stretched():
+    thin_fog = np.full((4, 4), 0.8, np.float32)
+    assert np.array_equal(to_unit_range(thin_fog), thin_fog)
+
+
+@pytest.mark.parametrize("w_a, w_b, op, message", [
+    (-0.1, 0.5, "add", "--wx"), (0.5, float("nan"), "add", "--ws"),
+    (0.5, 0.5, "max", "operator"), (0.0, 0.0, "add", "both be 0")])
+def test_bad_weights_and_operators_name_the_option(w_a, w_b, op, message):
+    with pytest.raises(InputError, match=message):
+        xs_map(X, S, w_a, w_b, op)
+
+
+def test_nan_input_is_refused():
+    bad = X.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError):
+        xs_map(bad, S)
