@@ -17,12 +17,12 @@ import OpenImageIO as oiio
 
 from ..core.errors import InputError
 
-#: Pass name in the EXR -> (view-layer flag enabling it, channels).
+#: Our pass name -> (view-layer flag enabling it, its name in the EXR, channels).
 PASSES = {
-    "Combined": (None, "RGBA"),
-    "Depth": ("use_pass_z", "Z"),
-    "Normal": ("use_pass_normal", "XYZ"),
-    "Emit": ("use_pass_emit", "RGB"),
+    "Combined": (None, "Combined", "RGBA"),
+    "Depth": ("use_pass_z", "Depth", "Z"),
+    "Normal": ("use_pass_normal", "Normal", "XYZ"),
+    "Emit": ("use_pass_emit", "Emission", "RGB"),
 }
 
 
@@ -90,10 +90,10 @@ def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]
         image.close()
     out = {}
     for name in passes:
-        wanted = PASSES[name][1] if name in PASSES else "RGBA"
+        _, exr_name, wanted = PASSES.get(name, (None, name, "RGBA"))
         found = []
         for c in wanted:
-            for candidate in (f"{layer}.{name}.{c}", f"{name}.{c}"):
+            for candidate in (f"{layer}.{exr_name}.{c}", f"{exr_name}.{c}"):
                 if candidate in channels:
                     found.append(channels[candidate])
                     break

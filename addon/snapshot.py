@@ -1,0 +1,75 @@
+"""The snapshot of section 4.2: a fast Cycles render with direct lighting only, no media.
+
+The paper computes "an estimate (snapshot) of the scene, where only direct lighting is
+computed using ray tracing" and no participating medium, and feeds it (plus the inverted X
+map) to the saliency model. Here: Cycles with zero bounces (camera ray, surface, light
+samples), volumes off (view layer flag, and the world's volume unplugged on a temporary copy
+of the world), a few samples with a fixed seed. The Emit pass of the same render holds the
+directly visible emissive surfaces, which the 0-LightMap uses for emissive meshes.
+
+Everything runs inside ``preserved_scene``: the scene is left exactly as it was.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cycles_render import render_passes
+from .scene_state import preserved_scene
+
+#: Direct lighting from point-like lamps converges fast: a few samples, no denoiser needed.
+SNAPSHOT_SAMPLES = 4
+SNAPSHOT_SEED = 0
+
+
+@dataclass
+class Snapshot:
+    """The direct-lighting render (scene-linear RGBA) and the emission of visible surfaces."""
+
+    combined: np.ndarray     # (H, W, 4) float32
+    emission: np.ndarray     # (H, W, 3) float32
+    samples: int
+
+
+def _world_without_volume(world):
+    """A copy of the world whose Volume output is unplugged (the original is untouched)."""
+    copy = world.copy()
+    tree = copy.node_tree
+    if tree is not None:
+        output = tree.get_output_node("CYCLES")
+        if output is not None and "Volume" in output.inputs:
+            for link in list(output.inputs["Volume"].links):
+                tree.links.remove(link)
+    return copy
+
+
+def render_snapshot(scene, size: tuple[int, int] | None = None, samples: int = SNAPSHOT_SAMPLES,
+                    frame: int | None = None) -> Snapshot:
+    """Render the snapshot of the current frame (or ``frame``) at the render size (or ``size``)."""
+    with preserved_scene(scene):
+        if frame is not None:
+            scene.frame_set(frame)
+        render = scene.render
+        if size is not None:
+            render.resolution_x, render.resolution_y = size
+            render.resolution_percentage = 100
+        render.use_border = False
+        render.use_persistent_data = False
+        if scene.world is not None:
+            scene.world = _world_without_volume(scene.world)
+        cycles = scene.cycles
+        render.engine = "CYCLES"
+        cycles.samples = samples
+        cycles.use_adaptive_sampling = False
+        cycles.use_denoising = False
+        cycles.seed = SNAPSHOT_SEED
+        cycles.use_animated_seed = False
+        cycles.max_bounces = 0
+        cycles.diffuse_bounces = cycles.glossy_bounces = cycles.transmission_bounces = 0
+        cycles.volume_bounces = 0
+        cycles.transparent_max_bounces = max(cycles.transparent_max_bounces, 8)
+        for layer in scene.view_layers:
+            layer.use_volumes = False
+        passes = render_passes(scene, ("Combined", "Emit"))
+    return Snapshot(combined=passes["Combined"], emission=passes["Emit"], samples=samples)
