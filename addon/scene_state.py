@@ -27,6 +27,8 @@ def rna_values(struct, skip: tuple[str, ...] = ()) -> dict:
         name = prop.identifier
         if name in ("rna_type", "name") or name in skip or prop.is_readonly:
             continue
+        if getattr(prop, "is_deprecated", False):   # kept only for old scripts; we never set them
+            continue
         if prop.type in _VALUE_TYPES:
             value = getattr(struct, name)
             if getattr(prop, "is_array", False) or (prop.type != "STRING" and hasattr(value, "__len__")
