@@ -23,6 +23,7 @@ PASSES = {
     "Depth": ("use_pass_z", "Z"),
     "Normal": ("use_pass_normal", "XYZ"),
     "Emit": ("use_pass_emit", "RGB"),
+    "Object Index": ("use_pass_object_index", "X"),
 }
 
 
