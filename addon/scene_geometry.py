@@ -125,14 +125,23 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
     volumes: dict[str, Triangles] = {}
     mesh_cache: dict = {}
     seen: dict[str, int] = {}
+    kinds: dict = {}
+
+    def kind_of(material) -> tuple[bool, bool]:
+        """(stops camera rays, has a volume) of a material, looked up once."""
+        key = None if material is None else material.as_pointer()
+        if key not in kinds:
+            tree = None if material is None else material.node_tree
+            kinds[key] = (has_surface(material), tree is not None and has_volume(tree))
+        return kinds[key]
+
     for ob, matrix in renderable_instances(depsgraph):
         if ob.type not in _MESH_LIKE and ob.type != "VOLUME":
             continue
         count = seen.get(ob.name, 0)
         seen[ob.name] = count + 1
         materials = [slot.material for slot in ob.material_slots]
-        volume_slots = [i for i, m in enumerate(materials)
-                        if m is not None and m.node_tree is not None and has_volume(m.node_tree)]
+        volume_slots = [i for i, m in enumerate(materials) if kind_of(m)[1]]
         m = np.array(matrix, dtype=np.float64)
         if ob.type == "VOLUME":
             for i in volume_slots:
@@ -148,7 +157,7 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             continue
         if materials:
             slot = np.clip(material_index, 0, len(materials) - 1)
-            surface_slot = np.array([has_surface(mat) for mat in materials])
+            surface_slot = np.array([kind_of(mat)[0] for mat in materials])
             is_surface = surface_slot[slot]
         else:
             slot = np.zeros(len(triangles), dtype=np.int32)

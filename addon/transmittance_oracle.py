@@ -188,7 +188,6 @@ class _OracleMaterials:
         import bpy
 
         self.bpy = bpy
-        self.scene = scene
         self._copies: dict = {}
         self._emission = None
 
@@ -294,7 +293,7 @@ def _volume_closures(tree, socket, depth=0):
     return found
 
 
-def _source(tree, socket):
+def _source(socket):
     """The output feeding ``socket``, or None (then its default_value is what counts)."""
     for link in socket.links:
         if not link.is_muted:
@@ -328,7 +327,7 @@ def _vector_math(tree, operation, a, b):
 
 
 def _input(node, name):
-    source = _source(None, node.inputs[name])
+    source = _source(node.inputs[name])
     if source is not None:
         return source
     return tuple(node.inputs[name].default_value)[:3]
@@ -355,7 +354,7 @@ def _replace_closure(tree, node, grids: frozenset) -> None:
         return
     absorption = tree.nodes.new("ShaderNodeVolumeAbsorption")
     absorption.location = node.location
-    density_source = _source(tree, node.inputs["Density"])
+    density_source = _source(node.inputs["Density"])
     density_default = node.inputs["Density"].default_value
     color = _input(node, "Color")
     if node.type == "PRINCIPLED_VOLUME":

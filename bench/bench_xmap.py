@@ -8,6 +8,10 @@ of (a) ``compute_x_map`` with no cache: scene scan, BVH build, ray casts, media;
 recomputation of X from the cached rays after the fog density changed
 (``x_map_from_cached_rays``), with and without reading the cache file.
 Targets (issue 3): (a) <= 1.0 s, (b) <= 0.1 s for homogeneous media.
+
+``--noise-fog`` drives the fog density by a Noise Texture (marched in numpy) and
+``--smoke`` adds an OpenVDB smoke volume (measured by the Cycles fallback), to show what
+those cost at the same resolution (no target).
 """
 from __future__ import annotations
 
@@ -71,6 +75,48 @@ def build_road_scene(bpy) -> None:
     tree.links.new(fog.outputs[0], output.inputs["Volume"])
 
 
+def make_fog_noisy(bpy, scene) -> None:
+    """Density 0.04 * noise(world position / 8): fog banks drifting across the road."""
+    tree = scene.world.node_tree
+    fog = next(n for n in tree.nodes if n.type == "PRINCIPLED_VOLUME")
+    coords, noise, scale = (tree.nodes.new(t) for t in ("ShaderNodeTexCoord", "ShaderNodeTexNoise",
+                                                        "ShaderNodeMath"))
+    noise.inputs["Scale"].default_value = 0.125
+    noise.inputs["Detail"].default_value = 3.0
+    scale.operation = "MULTIPLY"
+    scale.inputs[1].default_value = 0.04
+    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    tree.links.new(noise.outputs["Fac"], scale.inputs[0])
+    tree.links.new(scale.outputs[0], fog.inputs["Density"])
+
+
+def add_smoke(bpy, scene) -> None:
+    """A 6 x 6 x 4 smoke volume (a 48^3 'density' grid made by geometry nodes) on the road."""
+    volume = bpy.data.volumes.new("smoke")
+    ob = bpy.data.objects.new("smoke", volume)
+    scene.collection.objects.link(ob)
+    ob.location = (0.0, 25.0, 2.0)
+    tree = bpy.data.node_groups.new("smoke grid", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    cube, noise = tree.nodes.new("GeometryNodeVolumeCube"), tree.nodes.new("ShaderNodeTexNoise")
+    tree.links.new(tree.nodes.new("GeometryNodeInputPosition").outputs[0], noise.inputs["Vector"])
+    tree.links.new(noise.outputs["Fac"], cube.inputs["Density"])
+    cube.inputs["Min"].default_value, cube.inputs["Max"].default_value = (-3, -3, -2), (3, 3, 2)
+    for axis in "XYZ":
+        cube.inputs[f"Resolution {axis}"].default_value = 48
+    tree.links.new(cube.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
+    ob.modifiers.new("grid", "NODES").node_group = tree
+    material = bpy.data.materials.new("smoke")
+    material.node_tree.nodes.clear()
+    principled = material.node_tree.nodes.new("ShaderNodeVolumePrincipled")
+    output = material.node_tree.nodes.new("ShaderNodeOutputMaterial")
+    material.node_tree.links.new(principled.outputs[0], output.inputs["Volume"])
+    volume.materials.append(None)
+    ob.material_slots[0].link = "OBJECT"
+    ob.material_slots[0].material = material
+
+
 def median_time(function, runs: int) -> float:
     times = []
     for _ in range(runs):
@@ -85,6 +131,8 @@ def main(argv=None) -> int:
     parser.add_argument("scene", nargs="?", help="a .blend (default: the built-in stand-in)")
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--resolution", default="512x288")
+    parser.add_argument("--noise-fog", action="store_true", help="noise-driven fog density")
+    parser.add_argument("--smoke", action="store_true", help="add an OpenVDB smoke volume")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT.parent))
     import bpy
@@ -101,6 +149,10 @@ def main(argv=None) -> int:
     else:
         build_road_scene(bpy)
         scene = bpy.context.scene
+        if args.noise_fog:
+            make_fog_noisy(bpy, scene)
+        if args.smoke:
+            add_smoke(bpy, scene)
     width, height = (int(v) for v in args.resolution.lower().split("x"))
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
@@ -137,6 +189,11 @@ def main(argv=None) -> int:
     print(f"X from cached rays:        median {in_memory:.4f} s (rays in memory), "
           f"{from_disk:.4f} s (rays read from zcache.npz)")
     print(f"compute_x_map, cache hit:  median {cached_api:.3f} s (scene scan + cache check + X)")
+    if info.get("cycles_fallback"):
+        print(f"Cycles fallback for {', '.join(info['cycles_fallback']['media'])}: "
+              f"{info['cycles_fallback']['seconds']:.2f} s of the total")
+    if args.noise_fog or args.smoke or args.scene:
+        return 0
     ok = full <= 1.0 and from_disk <= 0.1
     print("targets (<= 1.0 s, <= 0.1 s):", "met" if ok else "NOT met")
     return 0

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import cycles_noise
+from .shader_math import (BLEND_MODES, MATH_OPERATIONS, blend_colors, math_op, safe_divide,
+                          safe_pow, sign)
 
 F32 = np.float32
 #: Nodes whose outputs depend on where they are evaluated.
@@ -104,13 +106,6 @@ def euler_matrix(rotation) -> np.ndarray:
     return np.stack([np.stack(np.broadcast_arrays(*row), axis=-1) for row in rows], axis=-2)
 
 
-def _safe_divide(a, b):
-    a, b = np.broadcast_arrays(np.asarray(a, dtype=F32), np.asarray(b, dtype=F32))
-    out = np.zeros(a.shape, dtype=F32)
-    np.divide(a, b, out=out, where=b != 0)
-    return out
-
-
 def _mapping(ev, node):
     vector = ev.input(node, "Vector")
     location = ev.input(node, "Location")
@@ -121,13 +116,13 @@ def _mapping(ev, node):
     if kind == "POINT":
         out = np.einsum("...ij,...j->...i", matrix, vector * scale) + location
     elif kind == "TEXTURE":
-        out = _safe_divide(np.einsum("...ji,...j->...i", matrix, vector - location), scale)
+        out = safe_divide(np.einsum("...ji,...j->...i", matrix, vector - location), scale)
     elif kind == "VECTOR":
         out = np.einsum("...ij,...j->...i", matrix, vector * scale)
     else:   # NORMAL
-        out = np.einsum("...ij,...j->...i", matrix, _safe_divide(vector, scale))
+        out = np.einsum("...ij,...j->...i", matrix, safe_divide(vector, scale))
         length = np.linalg.norm(out, axis=-1, keepdims=True)
-        out = _safe_divide(out, length)
+        out = safe_divide(out, length)
     return {"Vector": out.astype(F32)}
 
 
@@ -174,84 +169,9 @@ def _tex_gradient(ev, node):
 # ---------------------------------------------------------------------------------------
 # Math
 
-def _safe_pow(a, b):
-    a, b = np.broadcast_arrays(np.asarray(a, F32), np.asarray(b, F32))
-    bad = (a < 0) & (b != np.trunc(b))
-    with np.errstate(all="ignore"):
-        return np.where(bad, F32(0.0), np.power(a, b)).astype(F32)
-
-
-def _fmod(a, b):
-    with np.errstate(all="ignore"):
-        return np.where(b != 0, np.fmod(a, np.where(b != 0, b, 1.0)), 0.0)
-
-
-def _wrap(value, high, low):
-    span = high - low
-    with np.errstate(all="ignore"):
-        return np.where(span != 0, value - span * np.floor((value - low) / np.where(span != 0, span, 1.0)), low)
-
-
-def _sign(a):
-    return np.where(a > 0, F32(1.0), np.where(a < 0, F32(-1.0), F32(0.0)))
-
-
-def _smooth_min(a, b, c):
-    with np.errstate(all="ignore"):
-        h = np.maximum(c - np.abs(a - b), 0.0) / np.where(c != 0, c, 1.0)
-    return np.where(c != 0, np.minimum(a, b) - h * h * h * c * F32(1.0 / 6.0), np.minimum(a, b))
-
-
-def _math_op(op, a, b, c):
-    with np.errstate(all="ignore"):
-        ops = {
-            "ADD": lambda: a + b, "SUBTRACT": lambda: a - b, "MULTIPLY": lambda: a * b,
-            "DIVIDE": lambda: _safe_divide(a, b), "MULTIPLY_ADD": lambda: a * b + c,
-            "POWER": lambda: _safe_pow(a, b),
-            "LOGARITHM": lambda: np.where((a > 0) & (b > 0), _safe_divide(
-                np.log(np.where(a > 0, a, 1.0)), np.log(np.where(b > 0, b, 1.0))), 0.0),
-            "SQRT": lambda: np.sqrt(np.maximum(a, 0.0)),
-            "INVERSE_SQRT": lambda: np.where(a > 0, 1.0 / np.sqrt(np.where(a > 0, a, 1.0)), 0.0),
-            "ABSOLUTE": lambda: np.abs(a), "EXPONENT": lambda: np.exp(a),
-            "MINIMUM": lambda: np.minimum(a, b), "MAXIMUM": lambda: np.maximum(a, b),
-            "LESS_THAN": lambda: (a < b).astype(F32), "GREATER_THAN": lambda: (a > b).astype(F32),
-            "SIGN": lambda: _sign(a),
-            "COMPARE": lambda: ((a == b) | (np.abs(a - b) <= np.maximum(c, np.finfo(F32).eps))).astype(F32),
-            "SMOOTH_MIN": lambda: _smooth_min(a, b, c),
-            "SMOOTH_MAX": lambda: -_smooth_min(-a, -b, c),
-            "ROUND": lambda: np.floor(a + 0.5), "FLOOR": lambda: np.floor(a),
-            "CEIL": lambda: np.ceil(a), "TRUNC": lambda: np.trunc(a),
-            "FRACT": lambda: a - np.floor(a), "MODULO": lambda: _fmod(a, b),
-            "FLOORED_MODULO": lambda: np.where(b != 0, a - np.floor(_safe_divide(a, b)) * b, 0.0),
-            "WRAP": lambda: _wrap(a, b, c),
-            "SNAP": lambda: np.floor(_safe_divide(a, b)) * b,
-            "PINGPONG": lambda: np.where(b != 0, np.abs(
-                (lambda t: t - np.floor(t))(_safe_divide(a - b, b * 2.0)) * b * 2.0 - b), 0.0),
-            "SINE": lambda: np.sin(a), "COSINE": lambda: np.cos(a), "TANGENT": lambda: np.tan(a),
-            "SINH": lambda: np.sinh(a), "COSH": lambda: np.cosh(a), "TANH": lambda: np.tanh(a),
-            "ARCSINE": lambda: np.arcsin(np.clip(a, -1.0, 1.0)),
-            "ARCCOSINE": lambda: np.arccos(np.clip(a, -1.0, 1.0)),
-            "ARCTANGENT": lambda: np.arctan(a), "ARCTAN2": lambda: np.arctan2(a, b),
-            "RADIANS": lambda: a * F32(np.pi / 180.0), "DEGREES": lambda: a * F32(180.0 / np.pi),
-        }
-        if op not in ops:
-            raise ValueError(f"math operation {op} is not supported")
-        return np.asarray(ops[op](), dtype=F32)
-
-
-MATH_OPERATIONS = frozenset(("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER",
-                             "LOGARITHM", "SQRT", "INVERSE_SQRT", "ABSOLUTE", "EXPONENT",
-                             "MINIMUM", "MAXIMUM", "LESS_THAN", "GREATER_THAN", "SIGN",
-                             "COMPARE", "SMOOTH_MIN", "SMOOTH_MAX", "ROUND", "FLOOR", "CEIL",
-                             "TRUNC", "FRACT", "MODULO", "FLOORED_MODULO", "WRAP", "SNAP",
-                             "PINGPONG", "SINE", "COSINE", "TANGENT", "SINH", "COSH", "TANH",
-                             "ARCSINE", "ARCCOSINE", "ARCTANGENT", "ARCTAN2", "RADIANS",
-                             "DEGREES"))
-
-
 def _math(ev, node):
     a, b, c = (ev.input(node, key) for key in ("Value", "Value_001", "Value_002"))
-    result = _math_op(node.props.get("operation", "ADD"), a, b, c)
+    result = math_op(node.props.get("operation", "ADD"), a, b, c)
     if node.props.get("use_clamp"):
         result = np.clip(result, 0.0, 1.0)
     return {"Value": result}
@@ -273,22 +193,22 @@ def _vector_math(ev, node):
             vector = np.cross(*np.broadcast_arrays(a, b))
         elif op == "PROJECT":
             length_sq = dot(b, b)
-            vector = _safe_divide(dot(a, b), length_sq)[..., None] * b
+            vector = safe_divide(dot(a, b), length_sq)[..., None] * b
         elif op == "SCALE":
             vector = a * np.asarray(scale)[..., None] if np.ndim(scale) else a * scale
         elif op == "NORMALIZE":
-            vector = _safe_divide(a, np.linalg.norm(a, axis=-1, keepdims=True))
+            vector = safe_divide(a, np.linalg.norm(a, axis=-1, keepdims=True))
         elif op == "MULTIPLY_ADD":
             vector = a * b + c
         elif op == "POWER":
-            vector = _safe_pow(a, b)
+            vector = safe_pow(a, b)
         elif op == "SIGN":
-            vector = _sign(a)
+            vector = sign(a)
         elif op in ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "SNAP", "FLOOR", "CEIL",
                     "FRACTION", "ABSOLUTE", "MINIMUM", "MAXIMUM", "SINE", "COSINE",
                     "TANGENT", "MODULO", "WRAP"):
             scalar = {"FRACTION": "FRACT"}.get(op, op)
-            vector = _math_op(scalar, a, b, c)
+            vector = math_op(scalar, a, b, c)
         else:
             raise ValueError(f"vector math operation {op} is not supported")
     return {"Vector": np.asarray(vector, F32), "Value": F32(0.0)}
@@ -314,7 +234,7 @@ def _map_range(ev, node):
         keys = ("Vector", "From_Min_FLOAT3", "From_Max_FLOAT3", "To_Min_FLOAT3",
                 "To_Max_FLOAT3", "Steps_FLOAT3")
         value, f0, f1, t0, t1, steps = (ev.input(node, k) for k in keys)
-        factor = _safe_divide(value - f0, f1 - f0)
+        factor = safe_divide(value - f0, f1 - f0)
         if kind == "STEPPED":
             factor = np.where(steps > 0, np.floor(factor * (steps + 1.0)) / np.where(steps > 0, steps, 1.0), 0.0)
         elif kind == "SMOOTHSTEP":
@@ -401,36 +321,6 @@ def _gamma(ev, node):
     with np.errstate(all="ignore"):
         powered = np.where(color > 0, np.power(np.where(color > 0, color, 1.0), g), color)
     return {"Color": np.where(g == 0, F32(1.0), powered).astype(F32)}
-
-
-def blend_colors(blend: str, t, a, b):
-    """Cycles' ``svm_mix`` for the blend modes supported here (t may be (..., 1))."""
-    with np.errstate(all="ignore"):
-        if blend == "MIX":
-            return (1.0 - t) * a + t * b
-        if blend == "ADD":
-            return a + t * b
-        if blend == "MULTIPLY":
-            return a * ((1.0 - t) + t * b)
-        if blend == "SUBTRACT":
-            return a - t * b
-        if blend == "SCREEN":
-            return 1.0 - ((1.0 - t) + t * (1.0 - b)) * (1.0 - a)
-        if blend == "DIVIDE":
-            return np.where(b != 0, (1.0 - t) * a + t * a / np.where(b != 0, b, 1.0), a)
-        if blend == "DIFFERENCE":
-            return (1.0 - t) * a + t * np.abs(a - b)
-        if blend == "DARKEN":
-            return (1.0 - t) * a + t * np.minimum(a, b)
-        if blend == "LIGHTEN":
-            return (1.0 - t) * a + t * np.maximum(a, b)
-        if blend == "EXCLUSION":
-            return np.maximum((1.0 - t) * a + t * (a + b - 2.0 * a * b), 0.0)
-    raise ValueError(f"mix blend mode {blend} is not supported")
-
-
-BLEND_MODES = frozenset(("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE",
-                         "DIFFERENCE", "DARKEN", "LIGHTEN", "EXCLUSION"))
 
 
 def _mix(ev, node):

@@ -72,7 +72,8 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
     x : (H, W) float32
         The X map at the whole render resolution (0 outside a render border's window).
     transmittance : (h, w, 3) float32
-        exp(-tau) per channel inside the window.
+        exp(-tau) per channel inside the window. With MinBound on, rays that hit nothing
+        are not integrated at all (MinBound overwrites their X), and read 1 here.
     info : dict
         Timings, the MinBound value, per-medium methods, warnings.
     """
@@ -84,7 +85,10 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
         tau = np.zeros(rays.shape + (3,))
         info["media"] = []
     else:
-        tau, info["media"] = optical_depth(rays, [m for m in media if m.evaluable], samples)
+        # MinBound overwrites every sky pixel: integrating those rays (often the longest,
+        # out to the clip end) would be wasted work.
+        only = rays.hit if (minbound and rays.hit.any()) else None
+        tau, info["media"] = optical_depth(rays, [m for m in media if m.evaluable], samples, only)
         if extra_tau is not None:
             tau = tau + extra_tau
     transmittance = np.exp(-tau).astype(np.float32)

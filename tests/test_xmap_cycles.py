@@ -129,8 +129,8 @@ def test_orthographic_shift_sensor_fit_and_border(blender):
     _compare_z(scene, z)
 
 
-def test_perspective_shift_and_clip_start(blender):
-    scene = base_scene(blender)
+def test_perspective_portrait_shift_and_clip_start(blender):
+    scene = base_scene(blender, width=30, height=48)     # AUTO sensor fit on a portrait frame
     camera = scene.camera.data
     camera.shift_x, camera.shift_y = -0.1, 0.15
     camera.clip_start = 3.0          # media and surfaces nearer than this are not seen
