@@ -190,6 +190,32 @@ def _position_and_texture_mapping(new, link, coord):
     return noise.outputs["Fac"]
 
 
+def _group_reroute_and_mute(new, link, coord):
+    """A node group (noise inside, scale from a group input), a reroute and a muted node."""
+    import bpy
+
+    group = bpy.data.node_groups.get("density group")
+    if group is None:
+        group = bpy.data.node_groups.new("density group", "ShaderNodeTree")
+        group.interface.new_socket("Vector", in_out="INPUT", socket_type="NodeSocketVector")
+        group.interface.new_socket("Scale", in_out="INPUT", socket_type="NodeSocketFloat")
+        group.interface.new_socket("Fac", in_out="OUTPUT", socket_type="NodeSocketFloat")
+        inside, outside = group.nodes.new("NodeGroupInput"), group.nodes.new("NodeGroupOutput")
+        noise = group.nodes.new("ShaderNodeTexNoise")
+        group.links.new(inside.outputs[0], noise.inputs["Vector"])
+        group.links.new(inside.outputs[1], noise.inputs["Scale"])
+        group.links.new(noise.outputs["Fac"], outside.inputs[0])
+    node = new("ShaderNodeGroup")
+    node.node_tree = group
+    node.inputs[1].default_value = 3.5
+    reroute, muted = new("NodeReroute"), new("ShaderNodeMath")
+    muted.operation, muted.mute = "SINE", True          # passes its first input through
+    link(coord.outputs["Object"], reroute.inputs[0])
+    link(reroute.outputs[0], node.inputs[0])
+    link(node.outputs[0], muted.inputs[0])
+    return muted.outputs[0]
+
+
 CASES = {
     "noise fbm distorted": _noise({"Detail": 2.5, "Distortion": 0.3, "Roughness": 0.6}, scale_by=3.0),
     "noise 4D": _noise({"noise_dimensions": "4D", "W": 0.7, "normalize": False}, scale_by=2.0),
@@ -218,6 +244,7 @@ CASES = {
     "mix screen": _mix("RGBA", "SCREEN"), "mix divide": _mix("RGBA", "DIVIDE"),
     "mix exclusion": _mix("RGBA", "EXCLUSION"),
     "odds and ends": _odds_and_ends, "position, texture mapping": _position_and_texture_mapping,
+    "group, reroute, mute": _group_reroute_and_mute,
 }
 
 
