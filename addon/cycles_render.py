@@ -23,6 +23,7 @@ PASSES = {
     "Depth": ("use_pass_z", "Depth", "Z"),
     "Normal": ("use_pass_normal", "Normal", "XYZ"),
     "Emit": ("use_pass_emit", "Emission", "RGB"),
+    "Object Index": ("use_pass_object_index", "Object Index", "X"),
 }
 
 

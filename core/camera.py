@@ -96,14 +96,15 @@ class CameraModel:
     def pixel_window(self) -> tuple[int, int, int, int]:
         """(row0, row1, col0, col1) of the pixels to compute: the render border, or all.
 
-        Rows count from the top; the window is half-open. Blender renders a pixel when its
-        centre lies inside the border (``rcti`` rounding), which is what this reproduces.
+        Rows count from the top; the window is half-open. Blender turns the border's
+        fractions into pixels by truncating ``border * size`` computed in single
+        precision, which is what this reproduces (checked against Cycles renders).
         """
         if self.border is None:
             return 0, self.height, 0, self.width
-        bx0, by0, bx1, by1 = self.border
-        col0, col1 = int(round(bx0 * self.width)), int(round(bx1 * self.width))
-        y0, y1 = int(round(by0 * self.height)), int(round(by1 * self.height))
+        bx0, by0, bx1, by1 = (np.float32(v) for v in self.border)
+        col0, col1 = int(bx0 * np.float32(self.width)), int(bx1 * np.float32(self.width))
+        y0, y1 = int(by0 * np.float32(self.height)), int(by1 * np.float32(self.height))
         if col1 <= col0 or y1 <= y0:
             raise InputError(f"the render border of camera '{self.name}' has zero area")
         return self.height - y1, self.height - y0, col0, col1
@@ -148,7 +149,7 @@ class CameraModel:
         if self.kind == "ORTHO":
             shape = directions.shape[:-1]
             return np.full(shape, self.clip_start), np.full(shape, self.clip_end)
-        axis = -self.view_axis()
+        axis = self.view_axis()
         cos = directions @ axis
         return self.clip_start / cos, self.clip_end / cos
 

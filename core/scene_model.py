@@ -5,6 +5,7 @@ convert to JSON-ready dicts with ``to_dict`` (the ``xsl-render info --json`` out
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 
 Vec3 = tuple[float, float, float]
@@ -26,24 +27,23 @@ def closure_extinction(node_type: str, density: float, color: Vec3 = (1.0, 1.0, 
                        scatter_coefficients: Vec3 = (0.0, 0.0, 0.0)) -> Vec3:
     """Extinction coefficient (per scene unit, per RGB channel) of one volume closure.
 
-    As Cycles defines them: Principled Volume scatters density*colour and absorbs
-    density*(1-colour)*(1-absorption colour); Volume Scatter has extinction density*colour;
-    Volume Absorption density*(1-colour); Volume Coefficients gives the coefficients
-    directly, scaled by density. Colours are clamped to [0, 1] as Cycles clamps them.
+    As Cycles' SVM computes it (``svm_node_principled_volume``, ``svm_node_closure_volume``):
+    density is clamped at 0; Principled Volume has extinction
+    density * (colour + max(1 - colour, 0) * max(1 - sqrt(absorption colour), 0)) (note
+    the square root, checked against renders); Volume Scatter density * colour; Volume
+    Absorption density * (1 - colour); Volume Coefficients the sum of its absorption and
+    scatter coefficients (it has no density).
     """
-    def clamp(v):
-        return tuple(min(max(float(c), 0.0), 1.0) for c in v)
-
+    density = max(float(density), 0.0)
     if node_type == "PRINCIPLED_VOLUME":
-        c, a = clamp(color), clamp(absorption_color)
-        return tuple(density * (ci + (1.0 - ci) * (1.0 - ai)) for ci, ai in zip(c, a))
+        return tuple(density * (c + max(1.0 - c, 0.0) * max(1.0 - math.sqrt(max(a, 0.0)), 0.0))
+                     for c, a in zip(color, absorption_color))
     if node_type == "VOLUME_SCATTER":
-        return tuple(density * ci for ci in clamp(color))
+        return tuple(density * c for c in color)
     if node_type == "VOLUME_ABSORPTION":
-        return tuple(density * (1.0 - ci) for ci in clamp(color))
+        return tuple(density * (1.0 - c) for c in color)
     if node_type == "VOLUME_COEFFICIENTS":
-        return tuple(density * (max(a, 0.0) + max(s, 0.0))
-                     for a, s in zip(absorption_coefficients, scatter_coefficients))
+        return tuple(a + s for a, s in zip(absorption_coefficients, scatter_coefficients))
     raise ValueError(f"not a volume shader node: {node_type}")
 
 

@@ -1,0 +1,202 @@
+"""What the camera rays can meet, as plain arrays: surfaces, volume boundaries and media.
+
+One pass over the evaluated depsgraph (instances included, objects hidden from the render
+or from camera rays left out) collects, in world space:
+
+* every triangle that stops a camera ray: faces whose material has a surface (or no
+  material, which Cycles renders as its default surface);
+* the boundary of each object volume (faces with a volume-only material are not
+  surfaces: rays pass through them into the medium);
+* the media themselves (``core.media.VolumeMedium``), the world volume first.
+
+A digest of the camera and all this geometry keys the ray cache: if it has not changed,
+the Z buffer and the media intervals on disk are still right, whatever the media's
+densities and colours have become.
+"""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.camera import CameraModel
+from ..core.media import VolumeMedium, check_densities
+from ..core.shader_graph import ShaderGraph
+from .scene_probe import renderable_instances
+from .shader_export import export_volume_graph, has_surface, has_volume
+
+#: Object types Cycles renders as triangle meshes.
+_MESH_LIKE = ("MESH", "CURVE", "SURFACE", "FONT", "META")
+
+
+@dataclass
+class Triangles:
+    """World-space triangles: vertices (V, 3) float64 and vertex indices (T, 3) int32."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+
+    @staticmethod
+    def empty() -> "Triangles":
+        return Triangles(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int32))
+
+    @staticmethod
+    def concatenate(parts: list["Triangles"]) -> "Triangles":
+        if not parts:
+            return Triangles.empty()
+        offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+        return Triangles(np.concatenate([p.vertices for p in parts]),
+                         np.concatenate([p.triangles + o for p, o in zip(parts, offsets)]).astype(np.int32))
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        used = self.vertices[np.unique(self.triangles)] if len(self.triangles) else self.vertices
+        return used.min(axis=0), used.max(axis=0)
+
+
+@dataclass
+class SceneGeometry:
+    surfaces: Triangles
+    volumes: dict[str, Triangles] = field(default_factory=dict)
+    digest: str = ""
+
+
+def _mesh_arrays(ob, cache: dict):
+    """Local vertices (V, 3), loop triangles (T, 3) and their material indices of an
+    evaluated object; meshes shared by several instances are read once."""
+    data = getattr(ob, "data", None)
+    key = data.as_pointer() if ob.type == "MESH" and data is not None else None
+    if key is not None and key in cache:
+        return cache[key]
+    mesh = data if ob.type == "MESH" else ob.to_mesh()
+    try:
+        if mesh is None:
+            arrays = (np.zeros((0, 3)), np.zeros((0, 3), np.int32), np.zeros(0, np.int32))
+        else:
+            co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+            mesh.vertices.foreach_get("co", co)
+            tris = mesh.loop_triangles
+            index = np.empty(len(tris) * 3, dtype=np.int32)
+            tris.foreach_get("vertices", index)
+            material = np.empty(len(tris), dtype=np.int32)
+            tris.foreach_get("material_index", material)
+            arrays = (co.reshape(-1, 3).astype(np.float64), index.reshape(-1, 3), material)
+    finally:
+        if ob.type != "MESH":
+            ob.to_mesh_clear()
+    if key is not None:
+        cache[key] = arrays
+    return arrays
+
+
+def _to_world(vertices, triangles, matrix) -> Triangles:
+    m = np.asarray(matrix, dtype=np.float64)
+    world = vertices @ m[:3, :3].T + m[:3, 3]
+    if np.linalg.det(m[:3, :3]) < 0:
+        # Cycles keeps normals pointing out of objects with a negative scale; so do we,
+        # since the winding tells rays whether they enter or leave a volume.
+        triangles = triangles[:, ::-1]
+    return Triangles(world, np.ascontiguousarray(triangles, dtype=np.int32))
+
+
+def _subset(vertices, triangles, keep) -> tuple[np.ndarray, np.ndarray]:
+    if keep.all():
+        return vertices, triangles
+    return vertices, triangles[keep]
+
+
+def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
+    """Surfaces, volume boundaries and media of the evaluated scene (see module doc)."""
+    media: list[VolumeMedium] = []
+    graphs: dict[str, ShaderGraph] = {}
+
+    def graph_of(tree, name) -> ShaderGraph:
+        if name not in graphs:
+            graphs[name] = export_volume_graph(tree)
+        return graphs[name]
+
+    world = scene.world
+    if world is not None and world.node_tree is not None and has_volume(world.node_tree):
+        graph = graph_of(world.node_tree, f"world:{world.name}")
+        if not graph.empty:
+            media.append(VolumeMedium(key=f"world:{world.name}", name=world.name, kind="world",
+                                      material=None, graph=graph))
+    surfaces: list[Triangles] = []
+    volumes: dict[str, Triangles] = {}
+    mesh_cache: dict = {}
+    seen: dict[str, int] = {}
+    kinds: dict = {}
+
+    def kind_of(material) -> tuple[bool, bool]:
+        """(stops camera rays, has a volume) of a material, looked up once."""
+        key = None if material is None else material.as_pointer()
+        if key not in kinds:
+            tree = None if material is None else material.node_tree
+            kinds[key] = (has_surface(material), tree is not None and has_volume(tree))
+        return kinds[key]
+
+    for ob, matrix in renderable_instances(depsgraph):
+        if ob.type not in _MESH_LIKE and ob.type != "VOLUME":
+            continue
+        count = seen.get(ob.name, 0)
+        seen[ob.name] = count + 1
+        materials = [slot.material for slot in ob.material_slots]
+        volume_slots = [i for i, m in enumerate(materials) if kind_of(m)[1]]
+        m = np.array(matrix, dtype=np.float64)
+        if ob.type == "VOLUME":
+            for i in volume_slots:
+                material = materials[i]
+                media.append(VolumeMedium(
+                    key=f"{ob.name}#{count}:{i}", name=ob.name, kind="volume_object",
+                    material=material.name, graph=graph_of(material.node_tree, f"mat:{material.name}"),
+                    world_to_object=np.linalg.inv(m),
+                    unsupported="an OpenVDB volume object (its grids are only readable by Cycles)"))
+            continue
+        vertices, triangles, material_index = _mesh_arrays(ob, mesh_cache)
+        if not len(triangles):
+            continue
+        if materials:
+            slot = np.clip(material_index, 0, len(materials) - 1)
+            surface_slot = np.array([kind_of(mat)[0] for mat in materials])
+            is_surface = surface_slot[slot]
+        else:
+            slot = np.zeros(len(triangles), dtype=np.int32)
+            is_surface = np.ones(len(triangles), dtype=bool)
+        if is_surface.any():
+            surfaces.append(_to_world(*_subset(vertices, triangles, is_surface), m))
+        for i in volume_slots:
+            material = materials[i]
+            key = f"{ob.name}#{count}:{i}"
+            boundary = slot == i
+            if not boundary.any():
+                continue
+            data = ob.data if ob.type == "MESH" else None
+            texspace = None
+            if data is not None and hasattr(data, "texspace_location"):
+                texspace = (tuple(data.texspace_location), tuple(data.texspace_size))
+            medium = VolumeMedium(key=key, name=ob.name, kind="mesh", material=material.name,
+                                  graph=graph_of(material.node_tree, f"mat:{material.name}"),
+                                  world_to_object=np.linalg.inv(m), texspace=texspace)
+            if len(volume_slots) > 1:
+                medium.unsupported = "an object with several volume materials"
+            media.append(medium)
+            volumes[key] = _to_world(*_subset(vertices, triangles, boundary), m)
+    for medium in media:
+        check_densities(medium)
+    geometry = SceneGeometry(surfaces=Triangles.concatenate(surfaces), volumes=volumes)
+    return geometry, media
+
+
+def geometry_digest(camera: CameraModel, geometry: SceneGeometry) -> str:
+    """A hash of everything the rays depend on: camera, surfaces, volume boundaries."""
+    digest = hashlib.blake2b(digest_size=16)
+    for name in ("kind", "width", "height", "lens", "sensor_width", "sensor_height", "sensor_fit",
+                 "ortho_scale", "shift_x", "shift_y", "clip_start", "clip_end",
+                 "pixel_aspect_x", "pixel_aspect_y", "border"):
+        digest.update(repr(getattr(camera, name)).encode())
+    digest.update(np.ascontiguousarray(camera.matrix_world, dtype=np.float64).tobytes())
+    for tris in [geometry.surfaces] + [geometry.volumes[k] for k in sorted(geometry.volumes)]:
+        digest.update(np.ascontiguousarray(tris.vertices, dtype=np.float32).tobytes())
+        digest.update(np.ascontiguousarray(tris.triangles).tobytes())
+    digest.update(repr(sorted(geometry.volumes)).encode())
+    return digest.hexdigest()

@@ -1,0 +1,127 @@
+"""The X map and Z buffer of a scene's active camera: the addon API of paper section 4.1.
+
+``compute_x_map(scene)`` scans the evaluated scene, casts the camera rays (or reuses the
+ones cached next to the maps when camera and geometry are unchanged), integrates the
+media numpy can evaluate and asks Cycles for the transmittance of the others (OpenVDB
+smoke, unsupported shader nodes), and returns X, Z and what it did.
+"""
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..core.camera_rays import load_rays, save_rays
+from ..core.transmittance import DEFAULT_SAMPLES
+from ..core.xmap import XMapWarning, x_map_from_cached_rays
+from .scene_geometry import geometry_digest, scan_scene
+from .scene_probe import camera_model
+from .zbuffer import cast_camera_rays
+
+CACHE_NAME = "zcache.npz"
+#: Cycles fallback for media numpy cannot evaluate: fraction of the resolution, samples.
+ORACLE_SCALE = 1.0
+ORACLE_SAMPLES = 16
+ORACLE_STEP_RATE = 1.0
+#: Transmittance below this counts as fully opaque when turning Cycles' answer into tau.
+_MIN_TRANSMITTANCE = 1e-6
+
+
+def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = True,
+                  depsgraph=None, samples: int = DEFAULT_SAMPLES,
+                  oracle_scale: float = ORACLE_SCALE, oracle_samples: int = ORACLE_SAMPLES,
+                  ) -> tuple[np.ndarray, np.ndarray, dict]:
+    """X map and Z buffer of the scene's active camera at the current frame.
+
+    Parameters
+    ----------
+    scene : bpy.types.Scene
+    cache_dir : path, optional
+        Folder of the ray cache (``zcache.npz``). When its key (camera and geometry) still
+        matches, no ray is cast; the file is (re)written otherwise.
+    minbound : bool
+        Give sky pixels the smallest X of the pixels with a surface (paper's MinBound).
+    depsgraph : optional
+        The evaluated depsgraph (default: the context's).
+    samples : int
+        Midpoint samples per ray interval for heterogeneous media.
+    oracle_scale, oracle_samples
+        Resolution fraction and samples of the Cycles render used for media numpy cannot
+        evaluate.
+
+    Returns
+    -------
+    x : (H, W) float32 in [0, 1]
+    z : (H, W) float32, distance along the ray to the first surface, inf for sky
+    info : dict (timings in seconds, cache use, media and how each was evaluated,
+           MinBound value, warnings)
+    """
+    import bpy
+
+    start = time.perf_counter()
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    camera = camera_model(scene)
+    geometry, media = scan_scene(scene, depsgraph)
+    timings = {"scan": time.perf_counter() - start}
+    key = geometry_digest(camera, geometry)
+
+    tick = time.perf_counter()
+    cache_path = Path(cache_dir) / CACHE_NAME if cache_dir is not None else None
+    rays = load_rays(cache_path, key) if cache_path is not None else None
+    cache_hit = rays is not None
+    if rays is None:
+        rays = cast_camera_rays(camera, geometry, key=key)
+        if cache_path is not None:
+            save_rays(cache_path, rays)
+    timings["rays"] = time.perf_counter() - tick
+
+    tick = time.perf_counter()
+    fallback = [m for m in media if not m.evaluable]
+    extra_tau = None
+    oracle = None
+    if fallback:
+        transmittance, seconds = _oracle_transmittance(scene, fallback, oracle_scale, oracle_samples)
+        row0, row1, col0, col1 = rays.window
+        window = np.maximum(transmittance[row0:row1, col0:col1], _MIN_TRANSMITTANCE)
+        extra_tau = -np.log(window.astype(np.float64))
+        oracle = {"media": [m.key for m in fallback], "seconds": seconds,
+                  "scale": oracle_scale, "samples": oracle_samples}
+    timings["cycles_fallback"] = time.perf_counter() - tick
+
+    tick = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", XMapWarning)
+        x, transmittance, details = x_map_from_cached_rays(
+            rays, [m for m in media if m.evaluable], minbound=minbound,
+            extra_tau=extra_tau, samples=samples)
+    for warning in caught:
+        warnings.warn(str(warning.message), XMapWarning, stacklevel=2)
+    timings["x"] = time.perf_counter() - tick
+    z = rays.full_frame(rays.distance(), fill=np.inf)
+    timings["total"] = time.perf_counter() - start
+    info = {
+        "frame": scene.frame_current,
+        "size": list(rays.size),
+        "window": list(rays.window),
+        "z_holds": "distance along the camera ray from its origin (eye or ortho plane)",
+        "cache": {"path": None if cache_path is None else str(cache_path), "hit": cache_hit,
+                  "key": key},
+        "media": [m.describe() for m in media],
+        "integration": details["media"],
+        "cycles_fallback": oracle,
+        "minbound": {"enabled": minbound, "value": details["minbound"]},
+        "sky_pixels": details["sky_pixels"],
+        "samples_per_interval": samples,
+        "warnings": details["warnings"],
+        "seconds": timings,
+    }
+    return x, z, info
+
+
+def _oracle_transmittance(scene, media, scale, samples):
+    from .transmittance_oracle import render_transmittance
+
+    return render_transmittance(scene, include=media, samples=samples, scale=scale,
+                                step_rate=ORACLE_STEP_RATE, sky=1.0)

@@ -1,0 +1,203 @@
+"""Benchmark: X map + Z buffer of a road scene at 512x288, and recomputation from the cache.
+
+    .venv/bin/python bench/bench_xmap.py [SCENE.blend] [--runs 5] [--resolution 512x288]
+
+Without a .blend, a road-like stand-in is built in memory (road, verges, lamp posts with
+heads, signs, cars, world fog; about 40k triangles). Prints the median of ``--runs`` runs
+of (a) ``compute_x_map`` with no cache: scene scan, BVH build, ray casts, media; (b) the
+recomputation of X from the cached rays after the fog density changed
+(``x_map_from_cached_rays``), with and without reading the cache file.
+Targets (issue 3): (a) <= 1.0 s, (b) <= 0.1 s for homogeneous media.
+
+``--noise-fog`` drives the fog density by a Noise Texture (marched in numpy) and
+``--smoke`` adds an OpenVDB smoke volume (measured by the Cycles fallback), to show what
+those cost at the same resolution (no target).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def build_road_scene(bpy) -> None:
+    """A night road in fog: what the paper's road scene holds, in simple shapes."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.render.resolution_x, scene.render.resolution_y = 512, 288
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    camera.location = (1.5, -8.0, 1.6)
+    camera.rotation_euler = (math.radians(86), 0.0, math.radians(-4))
+    camera.data.lens = 30
+    camera.data.clip_end = 500
+
+    def add(op, **kw):
+        op(**kw)
+        return bpy.context.active_object
+
+    road = add(bpy.ops.mesh.primitive_grid_add, x_subdivisions=8, y_subdivisions=200,
+               size=1.0, location=(0, 90, 0))
+    road.scale = (8, 200, 1)
+    add(bpy.ops.mesh.primitive_plane_add, size=600, location=(0, 100, -0.05))
+    for i in range(24):
+        for side in (-1, 1):
+            y = i * 9.0
+            pole = add(bpy.ops.mesh.primitive_cylinder_add, vertices=24, radius=0.08, depth=6,
+                       location=(side * 5.0, y, 3.0))
+            add(bpy.ops.mesh.primitive_uv_sphere_add, segments=24, radius=0.35,
+                ring_count=12, location=(side * 4.4, y, 6.0))
+            pole.name = f"pole {i} {side}"
+    for i in range(10):
+        add(bpy.ops.mesh.primitive_cube_add, size=1, location=(6.0, 12 + i * 18, 2.5)).scale = (0.05, 1.2, 0.8)
+        add(bpy.ops.mesh.primitive_cylinder_add, vertices=16, radius=0.05, depth=2,
+            location=(6.0, 12 + i * 18, 1.0))
+    for i in range(12):
+        car = add(bpy.ops.mesh.primitive_cube_add, size=1, location=((-1.8 if i % 2 else 1.8), 6 + i * 11, 0.7))
+        car.scale = (1.8, 4.2, 1.2)
+        modifier = car.modifiers.new("bevel", "SUBSURF")
+        modifier.levels = modifier.render_levels = 3
+    world = bpy.data.worlds.new("Fog")
+    scene.world = world
+    tree = world.node_tree
+    tree.nodes.clear()
+    output = tree.nodes.new("ShaderNodeOutputWorld")
+    fog = tree.nodes.new("ShaderNodeVolumePrincipled")
+    fog.inputs["Density"].default_value = 0.02
+    tree.links.new(fog.outputs[0], output.inputs["Volume"])
+
+
+def make_fog_noisy(bpy, scene) -> None:
+    """Density 0.04 * noise(world position / 8): fog banks drifting across the road."""
+    tree = scene.world.node_tree
+    fog = next(n for n in tree.nodes if n.type == "PRINCIPLED_VOLUME")
+    coords, noise, scale = (tree.nodes.new(t) for t in ("ShaderNodeTexCoord", "ShaderNodeTexNoise",
+                                                        "ShaderNodeMath"))
+    noise.inputs["Scale"].default_value = 0.125
+    noise.inputs["Detail"].default_value = 3.0
+    scale.operation = "MULTIPLY"
+    scale.inputs[1].default_value = 0.04
+    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    tree.links.new(noise.outputs["Fac"], scale.inputs[0])
+    tree.links.new(scale.outputs[0], fog.inputs["Density"])
+
+
+def add_smoke(bpy, scene) -> None:
+    """A 6 x 6 x 4 smoke volume (a 48^3 'density' grid made by geometry nodes) on the road."""
+    volume = bpy.data.volumes.new("smoke")
+    ob = bpy.data.objects.new("smoke", volume)
+    scene.collection.objects.link(ob)
+    ob.location = (0.0, 25.0, 2.0)
+    tree = bpy.data.node_groups.new("smoke grid", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    cube, noise = tree.nodes.new("GeometryNodeVolumeCube"), tree.nodes.new("ShaderNodeTexNoise")
+    tree.links.new(tree.nodes.new("GeometryNodeInputPosition").outputs[0], noise.inputs["Vector"])
+    tree.links.new(noise.outputs["Fac"], cube.inputs["Density"])
+    cube.inputs["Min"].default_value, cube.inputs["Max"].default_value = (-3, -3, -2), (3, 3, 2)
+    for axis in "XYZ":
+        cube.inputs[f"Resolution {axis}"].default_value = 48
+    tree.links.new(cube.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
+    ob.modifiers.new("grid", "NODES").node_group = tree
+    material = bpy.data.materials.new("smoke")
+    material.node_tree.nodes.clear()
+    principled = material.node_tree.nodes.new("ShaderNodeVolumePrincipled")
+    output = material.node_tree.nodes.new("ShaderNodeOutputMaterial")
+    material.node_tree.links.new(principled.outputs[0], output.inputs["Volume"])
+    volume.materials.append(None)
+    ob.material_slots[0].link = "OBJECT"
+    ob.material_slots[0].material = material
+
+
+def median_time(function, runs: int) -> float:
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scene", nargs="?", help="a .blend (default: the built-in stand-in)")
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--resolution", default="512x288")
+    parser.add_argument("--noise-fog", action="store_true", help="noise-driven fog density")
+    parser.add_argument("--smoke", action="store_true", help="add an OpenVDB smoke volume")
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT.parent))
+    import bpy
+    import numpy as np
+
+    from xsl_render.addon.blend_session import open_blend
+    from xsl_render.addon.scene_geometry import scan_scene
+    from xsl_render.addon.xmap import compute_x_map
+    from xsl_render.core.camera_rays import load_rays
+    from xsl_render.core.xmap import x_map_from_cached_rays
+
+    if args.scene:
+        scene = open_blend(args.scene)
+    else:
+        build_road_scene(bpy)
+        scene = bpy.context.scene
+        if args.noise_fog:
+            make_fog_noisy(bpy, scene)
+        if args.smoke:
+            add_smoke(bpy, scene)
+    width, height = (int(v) for v in args.resolution.lower().split("x"))
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    geometry, media = scan_scene(scene, depsgraph)
+    kinds = [f"{m.name} ({'homogeneous' if m.constant_extinction() is not None else 'heterogeneous'})"
+             for m in media]
+    print(f"scene: {args.scene or 'built-in road stand-in'}, {width}x{height}, "
+          f"{len(geometry.surfaces.triangles)} surface triangles, media: {', '.join(kinds) or 'none'}")
+
+    compute_x_map(scene, depsgraph=depsgraph)            # warm-up (imports, first BVH)
+    full = median_time(lambda: compute_x_map(scene, depsgraph=depsgraph), args.runs)
+    _, _, info = compute_x_map(scene, depsgraph=depsgraph)
+    parts = ", ".join(f"{k} {v:.3f}" for k, v in info["seconds"].items())
+    print(f"X + Z, rays cast:          median {full:.3f} s of {args.runs}  ({parts})")
+
+    with tempfile.TemporaryDirectory() as folder:
+        compute_x_map(scene, cache_dir=folder, depsgraph=depsgraph)
+        cache = Path(folder) / "zcache.npz"
+        rays = load_rays(cache)
+        densities = iter(np.linspace(0.01, 0.05, 10 * args.runs))
+
+        def recompute(from_disk: bool):
+            for medium in media:              # a different fog density each time
+                for node in medium.graph.nodes.values():
+                    if "Density" in node.inputs and not hasattr(node.inputs["Density"], "node"):
+                        node.inputs["Density"] = float(next(densities))
+            cached = load_rays(cache) if from_disk else rays
+            x_map_from_cached_rays(cached, media)
+
+        in_memory = median_time(lambda: recompute(False), args.runs)
+        from_disk = median_time(lambda: recompute(True), args.runs)
+        cached_api = median_time(lambda: compute_x_map(scene, cache_dir=folder, depsgraph=depsgraph), args.runs)
+    print(f"X from cached rays:        median {in_memory:.4f} s (rays in memory), "
+          f"{from_disk:.4f} s (rays read from zcache.npz)")
+    print(f"compute_x_map, cache hit:  median {cached_api:.3f} s (scene scan + cache check + X)")
+    if info.get("cycles_fallback"):
+        print(f"Cycles fallback for {', '.join(info['cycles_fallback']['media'])}: "
+              f"{info['cycles_fallback']['seconds']:.2f} s of the total")
+    if args.noise_fog or args.smoke or args.scene:
+        return 0
+    ok = full <= 1.0 and from_disk <= 0.1
+    print("targets (<= 1.0 s, <= 0.1 s):", "met" if ok else "NOT met")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,139 @@
+"""The Z buffer: every camera ray with where it starts, where it stops and which media it
+crosses, cached on disk so a changed medium never needs the rays cast again.
+
+Distances are measured along the ray from its origin (the eye for a perspective camera,
+the point on the camera plane for an orthographic one), in scene units. ``t_near`` is the
+clip start (media before it are not seen, as in Cycles), ``t_far`` the first visible
+surface or, where nothing is hit, the clip end. Cycles' Depth pass holds *planar* depth
+(distance along the view axis); ``planar_depth`` and ``ray_distance`` convert.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .files import atomic_path
+
+#: What z.exr holds where no surface is hit: Cycles' own Depth-pass value for "nothing".
+SKY_DEPTH = 1e10
+_CACHE_VERSION = 1
+
+
+@dataclass
+class MediumIntervals:
+    """Where the rays are inside one object's volume: ray index and [t0, t1) per piece."""
+
+    ray: np.ndarray          # (K,) int32, flat index into the window
+    t0: np.ndarray           # (K,) float64
+    t1: np.ndarray           # (K,) float64
+
+    def lengths(self, count: int) -> np.ndarray:
+        """Total distance inside the medium per ray, shape (count,)."""
+        return np.bincount(self.ray, weights=self.t1 - self.t0, minlength=count)
+
+
+@dataclass
+class CameraRays:
+    """The rays of one camera through the pixel centres of a window of the frame."""
+
+    size: tuple[int, int]                    # (height, width) of the whole frame
+    window: tuple[int, int, int, int]        # (row0, row1, col0, col1), half-open
+    origins: np.ndarray                      # (h, w, 3)
+    directions: np.ndarray                   # (h, w, 3) unit vectors
+    t_near: np.ndarray                       # (h, w)
+    t_far: np.ndarray                        # (h, w)
+    hit: np.ndarray                          # (h, w) bool: a surface stops the ray
+    view_axis: np.ndarray                    # (3,) unit vector the camera looks along
+    intervals: dict[str, MediumIntervals] = field(default_factory=dict)
+    key: str = ""
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.t_far.shape
+
+    @property
+    def count(self) -> int:
+        return int(self.t_far.size)
+
+    def distance(self) -> np.ndarray:
+        """Distance along each ray to the first surface; inf where the ray hits nothing."""
+        return np.where(self.hit, self.t_far, np.inf)
+
+    def planar(self) -> np.ndarray:
+        """Planar depth (what Cycles' Depth pass holds) to the first surface; inf for sky."""
+        return planar_depth(self.distance(), self.directions, self.view_axis)
+
+    def full_frame(self, values: np.ndarray, fill: float) -> np.ndarray:
+        """Place a window-sized map into the whole frame, ``fill`` outside the window."""
+        height, width = self.size
+        row0, row1, col0, col1 = self.window
+        out = np.full((height, width) + values.shape[2:], fill, dtype=np.float32)
+        out[row0:row1, col0:col1] = values
+        return out
+
+
+def planar_depth(distance: np.ndarray, directions: np.ndarray, view_axis: np.ndarray) -> np.ndarray:
+    """Distance along rays -> depth along the view axis (Cycles' Depth pass)."""
+    return distance * (directions @ np.asarray(view_axis, dtype=np.float64))
+
+
+def ray_distance(planar: np.ndarray, directions: np.ndarray, view_axis: np.ndarray) -> np.ndarray:
+    """Depth along the view axis -> distance along the rays (inverse of planar_depth)."""
+    return planar / (directions @ np.asarray(view_axis, dtype=np.float64))
+
+
+def depth_to_exr(distance: np.ndarray) -> np.ndarray:
+    """Distances with inf for sky -> the finite float32 array z.exr holds (sky = SKY_DEPTH)."""
+    return np.where(np.isfinite(distance), distance, SKY_DEPTH).astype(np.float32)
+
+
+def depth_from_exr(stored: np.ndarray) -> np.ndarray:
+    """z.exr values -> distances with inf for sky."""
+    stored = np.asarray(stored, dtype=np.float64)
+    return np.where(stored >= SKY_DEPTH * 0.5, np.inf, stored)
+
+
+# ---------------------------------------------------------------------------------------
+# Cache on disk
+
+def save_rays(path: str | os.PathLike, rays: CameraRays) -> Path:
+    """Write the rays to an .npz (atomically); ``load_rays`` reads it back."""
+    arrays = {
+        "version": np.array(_CACHE_VERSION), "key": np.array(rays.key),
+        "size": np.array(rays.size), "window": np.array(rays.window),
+        "origins": rays.origins, "directions": rays.directions, "t_near": rays.t_near,
+        "t_far": rays.t_far, "hit": rays.hit, "view_axis": rays.view_axis,
+        "medium_keys": np.array(list(rays.intervals), dtype=str),
+    }
+    for i, item in enumerate(rays.intervals.values()):
+        arrays[f"ray_{i}"], arrays[f"t0_{i}"], arrays[f"t1_{i}"] = item.ray, item.t0, item.t1
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+    return Path(path)
+
+
+def load_rays(path: str | os.PathLike, key: str | None = None) -> CameraRays | None:
+    """The cached rays at ``path``, or None if missing, unreadable or for another ``key``."""
+    path = Path(path)
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if int(data["version"]) != _CACHE_VERSION:
+                return None
+            if key is not None and str(data["key"]) != key:
+                return None
+            intervals = {str(k): MediumIntervals(data[f"ray_{i}"], data[f"t0_{i}"], data[f"t1_{i}"])
+                         for i, k in enumerate(data["medium_keys"])}
+            return CameraRays(
+                size=tuple(int(v) for v in data["size"]),
+                window=tuple(int(v) for v in data["window"]),
+                origins=data["origins"], directions=data["directions"], t_near=data["t_near"],
+                t_far=data["t_far"], hit=data["hit"], view_axis=data["view_axis"],
+                intervals=intervals, key=str(data["key"]))
+    except (OSError, ValueError, KeyError):
+        return None

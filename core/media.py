@@ -1,0 +1,87 @@
+"""A participating medium as the X map needs it: where it is and its extinction field.
+
+``addon.volume_export`` builds these from the scene; ``core.transmittance`` integrates
+them along camera rays. A medium is either evaluable here (a constant extinction, or a
+shader graph numpy can evaluate) or it names why not, and then Cycles itself measures its
+transmittance (``addon.transmittance_oracle``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import InputError
+from .shader_graph import GraphEvaluator, Link, ShaderGraph, evaluate_extinction
+from .shader_nodes import NodeContext
+
+
+@dataclass
+class VolumeMedium:
+    """One medium: the world volume, or one object instance with a volume material.
+
+    ``key`` identifies the instance across runs (the ray cache stores its intervals under
+    it); ``kind`` is "world", "mesh" or "volume_object". ``world_to_object`` and
+    ``texspace`` place the object's coordinate systems for texture lookups.
+    """
+
+    key: str
+    name: str
+    kind: str
+    material: str | None
+    graph: ShaderGraph
+    world_to_object: np.ndarray | None = None
+    texspace: tuple[tuple, tuple] | None = None
+    unsupported: str | None = None          # set when only Cycles can evaluate it
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def evaluable(self) -> bool:
+        return self.unsupported is None and self.graph.unsupported is None
+
+    @property
+    def reason(self) -> str | None:
+        return self.unsupported or self.graph.unsupported
+
+    def context(self, points: np.ndarray) -> NodeContext:
+        return NodeContext(points=np.asarray(points, dtype=np.float64),
+                           world_to_object=self.world_to_object, texspace=self.texspace)
+
+    def constant_extinction(self) -> np.ndarray | None:
+        """The extinction (3,) when it is the same everywhere, else None."""
+        if not self.evaluable or self.graph.depends_on_position():
+            return None
+        return evaluate_extinction(self.graph, self.context(np.zeros((1, 3))))[0].astype(np.float64)
+
+    def extinction(self, points: np.ndarray) -> np.ndarray:
+        """Extinction (N, 3) at world-space points."""
+        return evaluate_extinction(self.graph, self.context(points))
+
+    def describe(self) -> dict:
+        constant = self.constant_extinction() if self.evaluable else None
+        return {"key": self.key, "name": self.name, "kind": self.kind, "material": self.material,
+                "evaluated_by": "numpy" if self.evaluable else "cycles",
+                "reason": self.reason,
+                "homogeneous": constant is not None,
+                "extinction": None if constant is None else [float(v) for v in constant]}
+
+
+def check_densities(medium: VolumeMedium) -> None:
+    """Refuse negative or NaN densities that are the same everywhere (typed into a socket
+    or computed from constants). A density driven by a texture that dips below zero is
+    clamped at zero, as Cycles clamps it."""
+    if medium.graph.unsupported is not None:
+        return
+    constant = not medium.graph.depends_on_position()
+    evaluator = GraphEvaluator(medium.graph, medium.context(np.zeros((1, 3))))
+    for node in medium.graph.nodes.values():
+        if node.type not in ("PRINCIPLED_VOLUME", "VOLUME_SCATTER", "VOLUME_ABSORPTION"):
+            continue
+        if isinstance(node.inputs.get("Density"), Link) and not constant:
+            continue
+        value = float(np.ravel(evaluator.input(node, "Density", 1.0))[0])
+        if math.isnan(value) or value < 0.0:
+            where = medium.name if medium.material is None else f"{medium.name}' material '{medium.material}"
+            raise InputError(f"medium '{where}': volume node '{node.name}' has density {value:g}; "
+                             "densities must be finite and >= 0")

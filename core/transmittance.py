@@ -1,0 +1,114 @@
+"""Optical depth along camera rays: exp(-tau) is the fraction of light that reaches the eye.
+
+tau(ray) = integral of the extinction coefficient from the clip start to the first
+surface. Media add: the world volume fills every point of the ray (also inside object
+volumes, which is what Cycles renders: their extinctions sum), each object volume the
+intervals where the ray is inside its mesh. A medium whose extinction is the same
+everywhere takes the closed form kappa * length; any other is integrated by the midpoint
+rule (deterministic, so a recomputation is reproducible). The long intervals of a medium
+(its 95th percentile of length) get ``samples`` points; shorter ones proportionally
+fewer (rounded up to a power of two, at least 4), so every interval is sampled at about
+the same step. Per RGB channel throughout.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .camera_rays import CameraRays
+from .media import VolumeMedium
+
+#: Samples along the long intervals of a medium that varies in space. The midpoint rule
+#: converges as 1/n^2 on smooth fields; on the noise-fog test scene 32 samples left a mean
+#: error of 0.002 in X against 128, 64 keeps it near 0.0005.
+DEFAULT_SAMPLES = 64
+_MIN_SAMPLES = 4
+#: Points evaluated at once while marching (bounds memory, not results).
+_CHUNK_POINTS = 1 << 19
+
+
+def medium_segments(rays: CameraRays, medium: VolumeMedium, only: np.ndarray | None = None):
+    """(ray index, t0, t1) of the pieces of the rays inside ``medium`` (of the rays where
+    ``only`` is True, if given)."""
+    if medium.kind == "world":
+        t0, t1 = rays.t_near.ravel(), rays.t_far.ravel()
+        keep = t1 > t0
+        if only is not None:
+            keep &= only.ravel()
+        index = np.flatnonzero(keep)
+        return index.astype(np.int64), t0[index].astype(np.float64), t1[index].astype(np.float64)
+    intervals = rays.intervals.get(medium.key)
+    if intervals is None:
+        raise KeyError(f"the ray cache has no intervals for medium {medium.key}")
+    index = intervals.ray.astype(np.int64)
+    keep = slice(None) if only is None else only.ravel()[index]
+    return (index[keep], intervals.t0[keep].astype(np.float64),
+            intervals.t1[keep].astype(np.float64))
+
+
+def optical_depth(rays: CameraRays, media: list[VolumeMedium], samples: int = DEFAULT_SAMPLES,
+                  only: np.ndarray | None = None) -> tuple[np.ndarray, list[dict]]:
+    """Optical depth (h, w, 3) of ``media`` along ``rays`` and what each medium took.
+
+    Parameters
+    ----------
+    rays : CameraRays
+        The Z buffer (with the interval lists of every object medium).
+    media : list of VolumeMedium
+        Media numpy can evaluate (``medium.evaluable``).
+    samples : int
+        Midpoint samples per interval for media that vary in space.
+    only : (h, w) bool array, optional
+        Integrate these rays only (the others keep tau = 0).
+    """
+    count = rays.count
+    tau = np.zeros((count, 3), dtype=np.float64)
+    report = []
+    origins = rays.origins.reshape(-1, 3)
+    directions = rays.directions.reshape(-1, 3)
+    for medium in media:
+        start = time.perf_counter()
+        index, t0, t1 = medium_segments(rays, medium, only)
+        constant = medium.constant_extinction()
+        if constant is not None:
+            lengths = np.bincount(index, weights=t1 - t0, minlength=count)
+            tau += lengths[:, None] * constant[None, :]
+            method = "closed form"
+        else:
+            counts = _sample_counts(t1 - t0, samples)
+            for n in np.unique(counts):
+                pick = counts == n
+                _march(tau, medium, origins, directions, index[pick], t0[pick], t1[pick], int(n))
+            method = f"midpoint rule, {_MIN_SAMPLES}..{samples} samples per interval"
+        report.append({"medium": medium.key, "method": method, "intervals": int(len(index)),
+                       "seconds": time.perf_counter() - start})
+    return tau.reshape(rays.shape + (3,)), report
+
+
+def _sample_counts(lengths: np.ndarray, samples: int) -> np.ndarray:
+    """Samples per interval: ``samples`` for the long ones, fewer for short ones, powers
+    of two so the intervals fall into a few vectorised batches."""
+    samples = max(int(samples), 1)
+    if len(lengths) == 0:
+        return np.zeros(0, dtype=np.int64)
+    reference = max(float(np.percentile(lengths, 95)), 1e-12)
+    wanted = np.ceil(samples * lengths / reference)
+    counts = 2 ** np.ceil(np.log2(np.maximum(wanted, 1.0)))
+    return np.clip(counts, min(_MIN_SAMPLES, samples), samples).astype(np.int64)
+
+
+def _march(tau, medium, origins, directions, index, t0, t1, samples):
+    samples = max(int(samples), 1)
+    offsets = (np.arange(samples, dtype=np.float64) + 0.5) / samples
+    per_chunk = max(1, _CHUNK_POINTS // samples)
+    for first in range(0, len(index), per_chunk):
+        rows = index[first:first + per_chunk]
+        a, b = t0[first:first + per_chunk], t1[first:first + per_chunk]
+        ts = a[:, None] + (b - a)[:, None] * offsets[None, :]                  # (k, n)
+        points = origins[rows][:, None, :] + directions[rows][:, None, :] * ts[..., None]
+        extinction = medium.extinction(points.reshape(-1, 3)).reshape(len(rows), samples, 3)
+        segment_tau = extinction.astype(np.float64).mean(axis=1) * (b - a)[:, None]
+        for channel in range(3):
+            tau[:, channel] += np.bincount(rows, weights=segment_tau[:, channel],
+                                           minlength=len(tau))
