@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..core.camera_rays import load_rays, save_rays
+from ..core.camera_rays import CameraRays, load_rays, save_rays
+from ..core.media import VolumeMedium
 from ..core.transmittance import DEFAULT_SAMPLES
-from ..core.xmap import XMapWarning, x_map_from_cached_rays
+from ..core.xmap import XMapWarning, luminance, x_map_from_cached_rays
 from .scene_geometry import geometry_digest, scan_scene
 from .scene_probe import camera_model
 from .zbuffer import cast_camera_rays
@@ -29,10 +31,36 @@ ORACLE_STEP_RATE = 1.0
 _MIN_TRANSMITTANCE = 1e-6
 
 
+@dataclass
+class XMapResult:
+    """The X map and Z buffer plus what the other maps reuse: the rays and the media."""
+
+    x: np.ndarray                   # (H, W) float32 in [0, 1]
+    z: np.ndarray                   # (H, W) float32, distance along the ray, inf for sky
+    info: dict
+    rays: CameraRays
+    media: list[VolumeMedium]       # all media; those numpy cannot evaluate came from Cycles
+    x_without_minbound: np.ndarray  # (H, W): sky pixels 0 (the paper's value before MinBound)
+    cycles_transmittance: np.ndarray | None = None  # (H, W) of the media only Cycles evaluated
+
+
 def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = True,
                   depsgraph=None, samples: int = DEFAULT_SAMPLES,
                   oracle_scale: float = ORACLE_SCALE, oracle_samples: int = ORACLE_SAMPLES,
                   ) -> tuple[np.ndarray, np.ndarray, dict]:
+    """X map and Z buffer of the scene's active camera: ``(x, z, info)``.
+
+    See :func:`compute_x_map_detailed` for the parameters.
+    """
+    result = compute_x_map_detailed(scene, cache_dir, minbound, depsgraph, samples,
+                                    oracle_scale, oracle_samples)
+    return result.x, result.z, result.info
+
+
+def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound: bool = True,
+                           depsgraph=None, samples: int = DEFAULT_SAMPLES,
+                           oracle_scale: float = ORACLE_SCALE, oracle_samples: int = ORACLE_SAMPLES,
+                           ) -> XMapResult:
     """X map and Z buffer of the scene's active camera at the current frame.
 
     Parameters
@@ -53,10 +81,9 @@ def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = T
 
     Returns
     -------
-    x : (H, W) float32 in [0, 1]
-    z : (H, W) float32, distance along the ray to the first surface, inf for sky
-    info : dict (timings in seconds, cache use, media and how each was evaluated,
-           MinBound value, warnings)
+    XMapResult: x (H, W) float32 in [0, 1]; z (H, W) float32, distance along the ray to
+    the first surface, inf for sky; info (timings in seconds, cache use, media and how
+    each was evaluated, MinBound value, warnings); the rays and media for reuse.
     """
     import bpy
 
@@ -96,6 +123,9 @@ def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = T
         x, transmittance, details = x_map_from_cached_rays(
             rays, [m for m in media if m.evaluable], minbound=minbound,
             extra_tau=extra_tau, samples=samples)
+    # Light sources and emissive surfaces need the transmittance without MinBound's fill.
+    x_plain = x if not minbound else rays.full_frame(
+        np.where(rays.hit, luminance(transmittance), 0.0), fill=0.0)
     for warning in caught:
         warnings.warn(str(warning.message), XMapWarning, stacklevel=2)
     timings["x"] = time.perf_counter() - tick
@@ -117,7 +147,10 @@ def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = T
         "warnings": details["warnings"],
         "seconds": timings,
     }
-    return x, z, info
+    cycles_part = None if extra_tau is None else rays.full_frame(
+        luminance(np.exp(-extra_tau)).astype(np.float32), fill=1.0)
+    return XMapResult(x=x, z=z, info=info, rays=rays, media=media, x_without_minbound=x_plain,
+                      cycles_transmittance=cycles_part)
 
 
 def _oracle_transmittance(scene, media, scale, samples):

@@ -9,10 +9,14 @@ variance, and ``multi_gaussian`` applies the whole sum in one pass over a Gaussi
 space; ``multi_gaussian_direct`` is the literal iteration, kept as the reference.
 
 Sigmas are given in pixels at 512 pixels on the image's longer side and scaled with the
-resolution, so the map looks the same at every output size. The result is normalised to
-[0, 1] by its maximum, as the paper's figures show it (Fig. 5): the glow a light gets is
-then relative to its own peak, which the multi-Gaussian keeps high where one Gaussian
-would leave it near zero (Fig. 5b vs 5c).
+resolution, so the map looks the same at every output size.
+
+Normalisation to [0, 1] (``normalise_glow``): by the peak of the glow, L_n - L_0, with the
+light discs themselves clipped at 1. Dividing by the plain maximum would let a small
+bright lamp's own peak flatten its glow to nothing (its L_0 holds all its light in a
+pixel or two); the paper instead keeps the glow high by computing L_0 in HDR and reading
+the result in [0, 1], which is what clipping the light cores does here, independent of
+the scene's absolute brightness.
 """
 from __future__ import annotations
 
@@ -88,6 +92,18 @@ def normalise(light_map: np.ndarray) -> np.ndarray:
     peak = float(np.max(light_map)) if light_map.size else 0.0
     if peak <= 0 or not np.isfinite(peak):
         return np.zeros_like(light_map, dtype=np.float32)
+    return np.clip(light_map / peak, 0.0, 1.0).astype(np.float32)
+
+
+def normalise_glow(light_map: np.ndarray, zero_light_map: np.ndarray) -> np.ndarray:
+    """The L map in [0, 1]: L_n divided by the peak of its glow (L_n - L_0), clipped.
+
+    Where there is no glow (n = 0) this is L_0 scaled by its maximum.
+    """
+    glow = np.asarray(light_map, dtype=np.float64) - np.asarray(zero_light_map, dtype=np.float64)
+    peak = float(glow.max()) if glow.size else 0.0
+    if not peak > 1e-12 * max(float(np.max(zero_light_map)) if glow.size else 0.0, 1e-300):
+        return normalise(zero_light_map)
     return np.clip(light_map / peak, 0.0, 1.0).astype(np.float32)
 
 

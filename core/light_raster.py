@@ -9,12 +9,16 @@ Each light is drawn where the eye sees it, at its projected position and size:
 - emissive meshes from an emission image of the frame (what Cycles' Emit pass holds),
   which already has them at their visible size and clipped by whatever is in front.
 
-The value drawn is the light's radiance as the eye receives it: intensity spread over the
-projected area, times the transmittance of the medium between the eye and the light (the
-paper's weakness "a lamp deep in thick fog glows less than a near one"). A pixel is drawn
+What is drawn is how much light reaches the eye from each source: its irradiance at the
+eye (intensity / distance^2 for lamps, the sun's irradiance, radiance x pixel solid angle
+for emissive surfaces) times the transmittance of the medium on the way (a lamp deep in
+thick fog glows less than a near one), spread over the pixels the source covers. So the
+map's integral over a light is that light's share, whatever its size on screen: a point
+lamp of radius 0 and a large lantern of the same power weigh the same. A pixel is drawn
 only where the Z buffer (first surface along the pixel's ray) lies behind the light, so a
-light behind a wall contributes nothing and a half-hidden one is clipped (the paper's
-other admitted weakness). Sub-pixel lights keep their integral: they are supersampled.
+light behind a wall contributes nothing and a half-hidden one loses the hidden part (the
+paper's admitted weaknesses: occluded lights and the medium). Sub-pixel lights keep their
+integral (supersampled coverage).
 """
 from __future__ import annotations
 
@@ -45,7 +49,7 @@ class DrawnLight:
     reason: str
     pixels: float = 0.0            # covered area in pixels (fractional)
     visible_fraction: float = 0.0  # of the projected footprint, after occlusion
-    radiance: float = 0.0          # drawn value before transmittance
+    irradiance: float = 0.0        # at the eye, before the medium (W/m^2, luminance)
     transmittance: float = 1.0
     optical_depth: float = 0.0
 
@@ -198,9 +202,11 @@ def zero_light_map(camera: CameraModel, lights: list[LightSource], distance: np.
             entry.reason = "outside its cone" if light.kind == "SPOT" else "emits nothing toward the camera"
             continue
         if light.kind == "SUN":
-            footprint, radiance, light_distance, point = _sun_footprint(camera, light, intensity)
+            footprint, light_distance, point = _sun_footprint(camera, light)
+            irradiance = intensity                      # a sun lamp's strength is irradiance
         else:
-            footprint, radiance, light_distance, point = _lamp_footprint(camera, light, intensity)
+            footprint, light_distance, point = _lamp_footprint(camera, light)
+            irradiance = intensity / max(light_distance, 1e-9) ** 2
         if footprint is None:
             entry.reason = "not in the frame"
             continue
@@ -220,52 +226,48 @@ def zero_light_map(camera: CameraModel, lights: list[LightSource], distance: np.
             continue
         t = float(np.clip(transmittance_to(point[None])[0], 0.0, 1.0))
         entry.transmittance, entry.optical_depth = t, float(-math.log(max(t, 1e-30)))
-        entry.radiance, entry.drawn = radiance, True
+        entry.irradiance, entry.drawn = irradiance, True
         entry.reason = "drawn" if entry.visible_fraction > 0.999 else "partly hidden: clipped"
-        out[row0:row0 + h, col0:col0 + w] += visible * radiance * t
+        out[row0:row0 + h, col0:col0 + w] += visible / coverage.sum() * irradiance * t
     if emission is not None:
         glow = np.asarray(emission, dtype=np.float64)
         glow = luminance(np.moveaxis(glow[..., :3], -1, 0)) if glow.ndim == 3 else glow
         if emission_transmittance is not None:
             glow = glow * np.asarray(emission_transmittance, dtype=np.float64)
-        out += np.maximum(glow, 0.0)
+        out += np.maximum(glow, 0.0) * pixel_solid_angle(camera)
     return out.astype(np.float32), report
 
 
-def _lamp_footprint(camera: CameraModel, light: LightSource, intensity: float):
+def pixel_solid_angle(camera: CameraModel) -> float:
+    """Solid angle of one pixel near the view axis (orthographic cameras: its area), so
+    that radiance x this is the irradiance a pixel's worth of emitter sends to the eye."""
+    xmin, xmax, ymin, ymax, plane = camera.view_plane()
+    area = (xmax - xmin) / camera.width * (ymax - ymin) / camera.height
+    return area / (plane * plane) if camera.kind == "PERSP" else area
+
+
+def _lamp_footprint(camera: CameraModel, light: LightSource):
     point = np.asarray(light.location, dtype=np.float64)
     col, row, depth = camera.project(point[None])
     if not depth[0] > camera.clip_start:
-        return None, 0.0, 0.0, point
+        return None, 0.0, point
     light_distance = float(np.linalg.norm(point - camera.eye))
     if light.kind == "AREA":
         axes = _perpendicular_axes(np.asarray(light.direction))
-        corners = _area_corners(light, axes)
-        footprint = _footprint_polygon(camera, corners)
-        area = (math.pi / 4 if light.shape in ("DISK", "ELLIPSE") else 1.0) * light.size * (light.size_y or light.size)
-        radiance = intensity / max(area, 1e-12)      # Lambertian: I / A per unit projected area
-        return footprint, radiance, light_distance, point
-    radius = max(light.size, 0.0)
-    pixel = float(camera.pixel_size_at(depth[0]))
-    radius_px = radius / pixel if radius > 0 else 0.0
-    footprint = _footprint_disc(camera, float(col[0]), float(row[0]), radius_px)
-    # Radiance of a sphere light seen as a disc; a lamp of size 0 keeps its integral
-    # over the (sub-)pixel it falls in.
-    solid_area = math.pi * max(radius, pixel * 0.5 / SUPERSAMPLE) ** 2
-    return footprint, intensity / solid_area, light_distance, point
+        return _footprint_polygon(camera, _area_corners(light, axes)), light_distance, point
+    radius_px = max(light.size, 0.0) / float(camera.pixel_size_at(depth[0]))
+    return _footprint_disc(camera, float(col[0]), float(row[0]), radius_px), light_distance, point
 
 
-def _sun_footprint(camera: CameraModel, light: LightSource, irradiance: float):
+def _sun_footprint(camera: CameraModel, light: LightSource):
     if camera.kind == "ORTHO":
-        return None, 0.0, math.inf, camera.eye
+        return None, math.inf, camera.eye
     toward_sun = -np.asarray(light.direction, dtype=np.float64)
     far = camera.eye + toward_sun * camera.clip_end * 0.999
     col, row, depth = camera.project(far[None])
     if not depth[0] > 0:
-        return None, 0.0, math.inf, far
+        return None, math.inf, far
     half_angle = max(0.5 * light.size, 1e-4)
     xmin, xmax, _, _, plane = camera.view_plane()
     radius_px = math.tan(half_angle) * plane / ((xmax - xmin) / camera.width)
-    footprint = _footprint_disc(camera, float(col[0]), float(row[0]), radius_px)
-    radiance = irradiance / (math.pi * half_angle ** 2)
-    return footprint, radiance, math.inf, far
+    return _footprint_disc(camera, float(col[0]), float(row[0]), radius_px), math.inf, far

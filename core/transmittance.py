@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from .camera_rays import CameraRays
+from .camera_rays import CameraRays, MediumIntervals
 from .media import VolumeMedium
 
 #: Samples along the long intervals of a medium that varies in space. The midpoint rule
@@ -112,3 +112,36 @@ def _march(tau, medium, origins, directions, index, t0, t1, samples):
         for channel in range(3):
             tau[:, channel] += np.bincount(rows, weights=segment_tau[:, channel],
                                            minlength=len(tau))
+
+
+def transmittance_along_rays(rays: CameraRays, media: list[VolumeMedium], pixels: np.ndarray,
+                             distances: np.ndarray, samples: int = DEFAULT_SAMPLES) -> np.ndarray:
+    """exp(-tau) per RGB channel from the eye to ``distances`` along chosen cached rays.
+
+    Used for the light map: how much of a lamp's light survives the medium on its way to
+    the eye, taken along the camera ray through the lamp's pixel. ``pixels`` are flat
+    indices into the rays' window; a distance of ``inf`` (the sun) means the whole ray.
+    Where a surface comes first, the ray still stops there (the lamp is hidden anyway).
+    """
+    pixels = np.asarray(pixels, dtype=np.int64).ravel()
+    distances = np.asarray(distances, dtype=np.float64).ravel()
+    if pixels.size == 0:
+        return np.ones((0, 3))
+    t_far = rays.t_far.reshape(-1)[pixels]
+    t_far = np.where(np.isfinite(distances), np.minimum(t_far, distances), t_far)
+    position = {int(p): i for i, p in enumerate(pixels)}
+    intervals = {}
+    for key, medium_intervals in rays.intervals.items():
+        keep = np.isin(medium_intervals.ray, pixels)
+        ray = np.array([position[int(r)] for r in medium_intervals.ray[keep]], dtype=np.int32)
+        t0 = medium_intervals.t0[keep]
+        t1 = np.minimum(medium_intervals.t1[keep], t_far[ray]) if ray.size else medium_intervals.t1[keep]
+        nonempty = t1 > t0
+        intervals[key] = MediumIntervals(ray=ray[nonempty], t0=t0[nonempty], t1=t1[nonempty])
+    subset = CameraRays(
+        size=(1, len(pixels)), window=(0, 1, 0, len(pixels)),
+        origins=rays.origins.reshape(-1, 3)[pixels][None], directions=rays.directions.reshape(-1, 3)[pixels][None],
+        t_near=rays.t_near.reshape(-1)[pixels][None], t_far=t_far[None],
+        hit=np.ones((1, len(pixels)), dtype=bool), view_axis=rays.view_axis, intervals=intervals)
+    tau, _ = optical_depth(subset, [m for m in media if m.evaluable], samples)
+    return np.exp(-tau[0])

@@ -42,7 +42,7 @@ def test_maps_already_in_unit_range_are_not_stretched():
 
 @pytest.mark.parametrize("w_a, w_b, op, message", [
     (-0.1, 0.5, "add", "--wx"), (0.5, float("nan"), "add", "--ws"),
-    (0.5, 0.5, "max", "operator"), (0.0, 0.0, "add", "both be 0")])
+    (0.5, 0.5, "max", "--xs-op"), (0.0, 0.0, "add", "both be 0")])
 def test_bad_weights_and_operators_name_the_option(w_a, w_b, op, message):
     with pytest.raises(InputError, match=message):
         xs_map(X, S, w_a, w_b, op)

@@ -9,7 +9,7 @@ import pytest
 from xsl_render.core.camera import CameraModel
 from xsl_render.core.errors import InputError
 from xsl_render.core.light_map import (auto_parameters, eq6_components, multi_gaussian,
-                                       multi_gaussian_direct, normalise)
+                                       multi_gaussian_direct, normalise, normalise_glow)
 from xsl_render.core.light_raster import spot_weight, zero_light_map
 from xsl_render.core.scale_space import gaussian_mixture_blur
 from xsl_render.core.scene_model import LightSource
@@ -97,7 +97,7 @@ def test_glow_grows_with_n_and_sigma_base():
     image = np.zeros((144, 256))
     image[70:74, 126:130] = 1.0
     def glow_area(n, sigma_base):
-        return int((normalise(multi_gaussian(image, n, sigma_base)) > 0.1).sum())
+        return int((normalise_glow(multi_gaussian(image, n, sigma_base), image) > 0.1).sum())
     areas_n = [glow_area(n, 4.0) for n in (2, 4, 8, 12)]
     areas_sigma = [glow_area(8, s) for s in (1.0, 2.0, 4.0, 8.0)]
     assert areas_n == sorted(areas_n) and areas_n[0] < areas_n[-1]
@@ -215,4 +215,25 @@ def test_emission_image_adds_meshes_dimmed_by_their_transmittance():
     emission[4, 8] = (2.0, 2.0, 2.0)
     x_map = np.full((9, 16), 0.25)
     l0, _ = zero_light_map(cam, [], np.full((9, 16), np.inf), no_fog, emission, x_map)
-    assert l0[4, 8] == pytest.approx(0.5) and l0.sum() == pytest.approx(0.5)
+    # radiance 2, transmittance 0.25, times the solid angle of one pixel
+    expected = 0.5 * (0.72 / 16) * (0.405 / 9)
+    assert l0[4, 8] == pytest.approx(expected, rel=1e-5) and l0.sum() == pytest.approx(expected, rel=1e-5)
+
+
+@pytest.mark.parametrize("size", [0.0, 0.05, 0.6])
+def test_a_lamp_weighs_its_irradiance_whatever_its_size(size):
+    """I / d^2 = 1000 / (4 pi) / 100 lands in the map whether the lamp covers 0.01 or 30 px."""
+    cam = camera_at_origin()
+    l0, report = zero_light_map(cam, [lamp(size=size)], np.full((36, 64), np.inf), no_fog)
+    assert l0.sum() == pytest.approx(1000 / (4 * math.pi) / 100, rel=1e-5)
+    assert report[0].irradiance == pytest.approx(1000 / (4 * math.pi) / 100)
+
+
+def test_glow_normalisation_keeps_a_point_lamps_glow():
+    image = np.zeros((72, 128))
+    image[36, 64] = 50.0                       # all of a lamp's light in one pixel
+    plain = normalise(multi_gaussian(image, 8, 4.0))
+    glow = normalise_glow(multi_gaussian(image, 8, 4.0), image)
+    assert glow[36, 64] == 1.0 and glow.max() == 1.0
+    assert glow[36, 69] > 0.5 and glow[36, 69] > 2 * plain[36, 69]   # 5 px away
+    assert not normalise_glow(np.zeros((4, 4)), np.zeros((4, 4))).any()

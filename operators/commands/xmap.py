@@ -8,37 +8,24 @@ only the media change).
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import warnings
 from pathlib import Path
 
 from ...core.errors import InputError
+from .common import add_scene_arguments, parse_resolution
 
 NAME = "xmap"
 HELP = "compute the Z buffer and the X (extinction) map of the active camera"
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file")
+    add_scene_arguments(parser)
     parser.add_argument("--out", required=True, metavar="DIR", help="folder for z.exr, x.exr, xmap.json")
-    parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
-    parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
-    parser.add_argument("--frame", type=int, help="frame to evaluate (default: the current one)")
     parser.add_argument("--minbound", action=argparse.BooleanOptionalAction,
                         default=True, help="fill sky pixels with the smallest X (paper's MinBound)")
     parser.add_argument("--samples", type=int, default=None,
                         help="midpoint samples per ray interval for heterogeneous media")
-
-
-def parse_resolution(text: str) -> tuple[int, int]:
-    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text or "")
-    if not match:
-        raise InputError(f"--resolution must look like 512x288, got '{text}'")
-    width, height = int(match.group(1)), int(match.group(2))
-    if width < 1 or height < 1 or width > 65536 or height > 65536:
-        raise InputError(f"--resolution {width}x{height} is out of range")
-    return width, height
 
 
 def run(args) -> int:
@@ -52,7 +39,7 @@ def run(args) -> int:
     from ...core.transmittance import DEFAULT_SAMPLES
     from ...core.xmap import XMapWarning
 
-    size = parse_resolution(args.resolution) if args.resolution else None
+    size = parse_resolution(args.resolution)
     samples = DEFAULT_SAMPLES if args.samples is None else args.samples
     if samples < 1:
         raise InputError("--samples must be at least 1")

@@ -1,0 +1,181 @@
+"""All director maps of one frame: Z and X (4.1), snapshot and S (4.2), L (4.4), XS (4.3)
+and XSL (4.5). The Blender side of ``xsl-render maps``, the panel and the renderer.
+
+Data flows one way: the scene is read into plain data (camera, media, lights, rays,
+snapshot), the maps are computed by ``core`` functions, and nothing is written back. The
+frame and resolution are set inside ``preserved_scene`` and restored afterwards.
+"""
+from __future__ import annotations
+
+import time
+import warnings
+from typing import Callable
+
+import numpy as np
+
+from ..core.camera import CameraModel
+from ..core.director import xs_map, xsl_map
+from ..core.light_map import auto_parameters, multi_gaussian, normalise_glow
+from ..core.light_raster import zero_light_map
+from ..core.map_files import MapSet
+from ..core.map_options import MapOptions
+from ..core.saliency_input import modulated_saliency_map
+from ..core.scene_model import luminance
+from ..core.transmittance import transmittance_along_rays
+from .scene_probe import camera_model, find_lights
+from .scene_state import preserved_scene
+from .snapshot import render_snapshot
+from .xmap import XMapResult, compute_x_map_detailed
+
+NO_LIGHTS_WARNING = "no light source shows in the frame: the L map is 0 everywhere"
+Progress = Callable[[float, str], None]
+
+
+class MapWarning(UserWarning):
+    """Something the user should know about the maps (shown as a one-line warning)."""
+
+
+def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int] | None = None,
+                 frame: int | None = None, cache_dir=None, progress: Progress | None = None,
+                 depsgraph=None) -> MapSet:
+    """Compute every map for the scene's active camera.
+
+    Parameters
+    ----------
+    scene : bpy.types.Scene (left exactly as it was)
+    options : MapOptions (the paper's defaults if None)
+    size : (width, height) to compute at instead of the render resolution
+    frame : frame to evaluate instead of the current one
+    cache_dir : folder for the ray cache (instant X recomputation when only media change)
+    progress : called with (fraction done, message)
+    """
+    import bpy
+
+    options = (options or MapOptions()).validate()
+    report = progress or (lambda fraction, message: None)
+    seconds: dict[str, float] = {}
+    notes: list[str] = []
+    with preserved_scene(scene):
+        if frame is not None:
+            scene.frame_set(frame)
+        if size is not None:
+            scene.render.resolution_x, scene.render.resolution_y = size
+            scene.render.resolution_percentage = 100
+        depsgraph = bpy.context.evaluated_depsgraph_get() if depsgraph is None or frame is not None else depsgraph
+        camera = camera_model(scene)
+
+        report(0.0, "X map and Z buffer")
+        tick = time.perf_counter()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            xres = compute_x_map_detailed(scene, cache_dir=cache_dir, minbound=options.minbound,
+                                          depsgraph=depsgraph)
+        notes += [str(w.message) for w in caught]
+        seconds["x"] = time.perf_counter() - tick
+
+        report(0.3, "snapshot (direct light, no media)")
+        tick = time.perf_counter()
+        snapshot = render_snapshot(scene)
+        seconds["snapshot"] = time.perf_counter() - tick
+
+        report(0.6, "S map (saliency)")
+        tick = time.perf_counter()
+        s = modulated_saliency_map(snapshot.combined[..., :3], xres.x)
+        seconds["s"] = time.perf_counter() - tick
+
+        report(0.75, "L map (lights)")
+        tick = time.perf_counter()
+        lights = [light for light in find_lights(scene, depsgraph, camera) if light.in_frame]
+        l_map, light_info = light_map(camera, lights, xres, snapshot.emission, options)
+        if not light_info["drawn"]:
+            notes.append(NO_LIGHTS_WARNING)
+        seconds["l"] = time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        xs = xs_map(xres.x, s, options.wx, options.ws, options.xs_op)
+        seconds["xs"] = time.perf_counter() - tick
+        tick = time.perf_counter()
+        xsl = xsl_map(xs, l_map, options.wxs, options.wl, options.xsl_op)
+        seconds["xsl"] = time.perf_counter() - tick
+        frame_done = scene.frame_current
+    report(1.0, "maps done")
+    for note in dict.fromkeys(notes):
+        warnings.warn(note, MapWarning, stacklevel=2)
+    seconds["total"] = sum(seconds.values())
+    info = {
+        "scene": scene.name, "frame": frame_done, "size": [camera.width, camera.height],
+        "camera": scene.camera.name, "options": options.to_dict(), "seconds": seconds,
+        "x": xres.info, "snapshot": {"samples": snapshot.samples, "seed": 0,
+                                     "bounces": 0, "volumes": False},
+        "s": {"model": "Itti, Koch and Niebur 1998 on the tone-mapped snapshot plus 1 - X"},
+        "l": light_info, "warnings": list(dict.fromkeys(notes)),
+    }
+    return MapSet(z=xres.z, x=xres.x, snapshot=snapshot.combined, s=s, l=l_map, xs=xs, xsl=xsl, info=info)
+
+
+def light_transmittance(camera: CameraModel, xres: XMapResult) -> Callable[[np.ndarray], np.ndarray]:
+    """exp(-tau) from the eye to world points, along the camera ray through each point's pixel."""
+    rays = xres.rays
+    row0, row1, col0, col1 = rays.window
+
+    def transmittance_to(points: np.ndarray) -> np.ndarray:
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        col, row, _ = camera.project(points)
+        rows = np.clip(np.nan_to_num(row, nan=0).astype(int), row0, row1 - 1) - row0
+        cols = np.clip(np.nan_to_num(col, nan=0).astype(int), col0, col1 - 1) - col0
+        pixels = rows * (col1 - col0) + cols
+        distances = np.linalg.norm(points - camera.eye, axis=1)
+        distances = np.where(distances >= 0.99 * camera.clip_end, np.inf, distances)
+        t = luminance(np.moveaxis(transmittance_along_rays(rays, xres.media, pixels, distances), -1, 0))
+        if xres.cycles_transmittance is not None:
+            # Media only Cycles could evaluate: their transmittance to the first surface.
+            t = t * xres.cycles_transmittance[rows + row0, cols + col0]
+        return np.asarray(t, dtype=np.float64)
+
+    return transmittance_to
+
+
+def light_map(camera: CameraModel, lights, xres: XMapResult, emission: np.ndarray,
+              options: MapOptions) -> tuple[np.ndarray, dict]:
+    """The L map in [0, 1] and what was drawn, with n and sigma_base fixed or per light (auto)."""
+    l0_lamps, drawn = zero_light_map(camera, lights, xres.z, light_transmittance(camera, xres))
+    l0_meshes, _ = zero_light_map(camera, [], xres.z, lambda p: np.ones(len(p)),
+                                  emission=emission, emission_transmittance=xres.x_without_minbound)
+    groups: dict[tuple[int, float], np.ndarray] = {}
+
+    def parameters(optical_depth: float) -> tuple[int, float]:
+        auto_n, auto_sigma = auto_parameters(optical_depth)
+        return (auto_n if options.light_n is None else int(options.light_n),
+                auto_sigma if options.light_sigma_base is None else float(options.light_sigma_base))
+
+    used = []
+    if any(d.drawn for d in drawn):
+        # Each lamp again on its own, so that auto mode can spread each by its own fog.
+        for light, entry in zip([lt for lt in lights if lt.kind != "MESH"], drawn):
+            if not entry.drawn:
+                continue
+            single, _ = zero_light_map(camera, [light], xres.z, lambda p, t=entry.transmittance: np.full(len(p), t))
+            key = parameters(entry.optical_depth)
+            groups[key] = groups.get(key, 0) + single
+            used.append({"light": light.name, "n": key[0], "sigma_base": key[1]})
+    if l0_meshes.any():
+        mesh_pixels = l0_meshes > 0
+        tau = -np.log(np.clip(xres.x_without_minbound[mesh_pixels], 1e-6, 1.0))
+        key = parameters(float(np.median(tau)))
+        groups[key] = groups.get(key, 0) + l0_meshes
+        used.append({"light": "emissive surfaces", "n": key[0], "sigma_base": key[1]})
+    total = np.zeros((camera.height, camera.width))
+    l0_total = np.zeros_like(total)
+    for (n, sigma_base), l0 in groups.items():
+        total += multi_gaussian(l0, n, sigma_base)
+        l0_total += l0
+    info = {
+        "drawn": [d.__dict__ for d in drawn if d.drawn] + (
+            [{"name": "emissive surfaces", "kind": "MESH", "pixels": int((l0_meshes > 0).sum())}]
+            if l0_meshes.any() else []),
+        "not_drawn": [{"name": d.name, "kind": d.kind, "reason": d.reason} for d in drawn if not d.drawn],
+        "parameters": used,
+        "sigma_unit": "pixels at 512 px on the longer side",
+        "l0_peak": float(max(l0_lamps.max(), l0_meshes.max())) if l0_lamps.size else 0.0,
+    }
+    return normalise_glow(total, l0_total), info
