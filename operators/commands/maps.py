@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ...core.errors import InputError
 from .common import (add_map_arguments, add_scene_arguments, map_options_from_args,
                      parse_resolution, warnings_as_lines)
 
@@ -22,19 +23,19 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    # Check every option before Blender is even loaded.
+    options = map_options_from_args(args)
+    size = parse_resolution(args.resolution)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+
     import bpy
 
     from ...addon.blend_session import open_blend
     from ...addon.director_maps import MapWarning, compute_maps
     from ...core.map_files import write_map_set
     from ...core.xmap import XMapWarning
-
-    options = map_options_from_args(args)
-    size = parse_resolution(args.resolution)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        from ...core.errors import InputError
-        raise InputError(f"--out {out} exists and is not a folder")
     scene = open_blend(args.scene, args.scene_name)
     with warnings_as_lines(MapWarning, XMapWarning):
         maps = compute_maps(scene, options, size=size, frame=args.frame, cache_dir=out,
