@@ -1,4 +1,4 @@
 """Subcommands of ``xsl-render``; each module has NAME, HELP, add_arguments() and run()."""
-from . import info
+from . import info, render
 
-COMMANDS = [info]
+COMMANDS = [info, render]
