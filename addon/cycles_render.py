@@ -101,6 +101,12 @@ def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]
     """Read named passes of one view layer from a Blender multilayer EXR (or a plain EXR of
     the Combined pass, whose channels are just R, G, B, A)."""
     channels, _ = read_exr_parts(path)
+    return passes_from_channels(channels, layer, passes)
+
+
+def passes_from_channels(channels: dict[str, np.ndarray], layer: str,
+                         passes: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Named passes as (H, W, C) float32 arrays from the channels ``read_exr_parts`` found."""
     out = {}
     for name in passes:
         wanted = PASSES[name][1] if name in PASSES else "RGBA"

@@ -123,7 +123,7 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
         data = check_director_map(director_map, width, height)
         plan = make_plan(data, options)
         phases = {"maps": map_seconds, "plan": time.perf_counter() - started}
-        tracker = TileProgress(report, [rect.samples for rect in plan.rects])
+        tracker = TileProgress(report, [rect.samples for rect in plan.rects], options.render_cost)
         compositor = Compositor(width, height)
         tiles, composite_s = [], 0.0
         started = time.perf_counter()
@@ -218,7 +218,15 @@ def render_adaptive(scene, options: RenderOptions, seconds: float,
                     noise_threshold: float = CYCLES_DEFAULT_NOISE_THRESHOLD,
                     progress: ProgressCallback | None = None) -> RenderOutcome:
     """Cycles' adaptive sampling with ``max_spp`` as the ceiling, stopped at ``seconds`` of wall
-    time by Cycles' time limit (it may finish sooner if every pixel reaches the threshold)."""
+    time by Cycles' time limit (it may finish sooner if every pixel reaches the threshold).
+
+    Why the time limit and not a tuned threshold: the threshold that makes Cycles finish in
+    exactly ``seconds`` can only be found by trial renders, which cost more than the budget;
+    the time limit meets it in one render. The scene is synced by a 1-sample render of a few
+    pixels first (persistent data keeps it), so the sync that Cycles' limit does not count
+    is paid inside the budget. The threshold is Cycles' default unless given: what an artist
+    who switches on adaptive sampling and a time limit gets.
+    """
     if not seconds > 0:
         raise InputError(f"the time budget must be positive (got {seconds})")
     if not noise_threshold > 0:

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..core.camera import border_for_window
 from ..core.errors import InputError
-from .cycles_render import ensure_cycles, read_exr_parts, read_multilayer
+from .cycles_render import ensure_cycles, passes_from_channels, read_exr_parts
 from .scene_probe import render_size
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -73,8 +73,6 @@ class CyclesWindowRenderer:
     """
 
     def __init__(self, scene, seed: int):
-        import bpy
-
         self.scene = scene
         self.layer = render_layer(scene)
         self.width, self.height = render_size(scene)
@@ -98,7 +96,6 @@ class CyclesWindowRenderer:
         self._status_max = 0
         self._on_sample: Callable[[int, int], None] | None = None
         self._handler = self._render_status
-        bpy.app.handlers.render_stats.append(self._handler)
 
     # -- context manager -------------------------------------------------------------------
     def __enter__(self) -> "CyclesWindowRenderer":
@@ -108,10 +105,6 @@ class CyclesWindowRenderer:
         self.close()
 
     def close(self) -> None:
-        import bpy
-
-        if self._handler in bpy.app.handlers.render_stats:
-            bpy.app.handlers.render_stats.remove(self._handler)
         shutil.rmtree(self.folder, ignore_errors=True)
 
     def _render_status(self, status, *_):
@@ -125,14 +118,23 @@ class CyclesWindowRenderer:
                 self._on_sample(done, total)
 
     # -- rendering -------------------------------------------------------------------------
+    @staticmethod
+    def _assign(struct, name: str, value) -> bool:
+        """Set a property only when it changes (every assignment makes Cycles re-check that
+        part of the scene); True when it changed."""
+        if getattr(struct, name) == value:
+            return False
+        setattr(struct, name, value)
+        return True
+
     def _set_output(self, multilayer: bool) -> None:
         settings = self.scene.render.image_settings
         if hasattr(settings, "media_type"):        # Blender 5.0+: the format follows the media type
-            settings.media_type = "MULTI_LAYER_IMAGE" if multilayer else "IMAGE"
-        settings.file_format = "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR"
-        settings.color_mode = "RGBA"
-        settings.color_depth = "32"
-        settings.exr_codec = "NONE"              # tiles are small and temporary: skip compression
+            self._assign(settings, "media_type", "MULTI_LAYER_IMAGE" if multilayer else "IMAGE")
+        self._assign(settings, "file_format", "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR")
+        self._assign(settings, "color_mode", "RGBA")
+        self._assign(settings, "color_depth", "32")
+        self._assign(settings, "exr_codec", "NONE")    # small temporary files: skip compression
 
     def render(self, window: tuple[int, int, int, int] | None, samples: int,
                adaptive_threshold: float | None = None, time_limit: float = 0.0,
@@ -147,40 +149,49 @@ class CyclesWindowRenderer:
 
         scene, cycles, render = self.scene, self.scene.cycles, self.scene.render
         counted = adaptive_threshold is not None or time_limit > 0.0
-        cycles.samples = samples
-        cycles.use_adaptive_sampling = adaptive_threshold is not None
+        changed = [self._assign(cycles, "samples", samples),
+                   self._assign(cycles, "use_adaptive_sampling", adaptive_threshold is not None),
+                   self._assign(cycles, "time_limit", time_limit),
+                   self._assign(self.layer.cycles, "pass_debug_sample_count", counted)]
         if adaptive_threshold is not None:
-            cycles.adaptive_threshold = adaptive_threshold
-        cycles.time_limit = time_limit
-        self.layer.cycles.pass_debug_sample_count = counted
+            changed.append(self._assign(cycles, "adaptive_threshold", adaptive_threshold))
         self._set_output(multilayer=counted)
         if window is None:
-            render.use_border = False
+            self._assign(render, "use_border", False)
             shape = (self.height, self.width)
         else:
-            (render.border_min_x, render.border_min_y,
-             render.border_max_x, render.border_max_y) = border_for_window(window, self.width, self.height)
-            render.use_border = True
-            render.use_crop_to_border = True
+            border = border_for_window(window, self.width, self.height)
+            for name, value in zip(("border_min_x", "border_min_y", "border_max_x", "border_max_y"), border):
+                self._assign(render, name, value)
+            self._assign(render, "use_border", True)
+            self._assign(render, "use_crop_to_border", True)
             shape = (window[1] - window[0], window[3] - window[2])
-        scene.update_tag()          # see the module docstring: add-on properties do not tag it
+        if any(changed):
+            scene.update_tag()      # see the module docstring: add-on properties do not tag it
         for old in self.folder.glob("window*"):
             old.unlink()
         self._status_max, self._on_sample = 0, on_sample
+        # Cycles' status lines cost ~2 ms per render through a Python handler: listen only
+        # when the count it completed or the progress is wanted.
+        listen = counted or on_sample is not None
+        if listen:
+            bpy.app.handlers.render_stats.append(self._handler)
         started = time.perf_counter()
         try:
             result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
         finally:
             self._on_sample = None
+            if listen:
+                bpy.app.handlers.render_stats.remove(self._handler)
         seconds = time.perf_counter() - started
         if "FINISHED" not in result:
             raise RuntimeError(f"Cycles did not finish the render ({result})")
         files = sorted(self.folder.glob("window*.exr"))
         if not files:
             raise RuntimeError("Cycles wrote no image")
-        _, attributes = read_exr_parts(files[0])
+        channels, attributes = read_exr_parts(files[0])
         wanted = ("Combined", "Debug Sample Count") if counted else ("Combined",)
-        passes = read_multilayer(files[0], self.layer.name, wanted)
+        passes = passes_from_channels(channels, self.layer.name, wanted)
         pixels = passes["Combined"]
         if pixels.shape[:2] != shape:
             raise RuntimeError(f"Cycles rendered {pixels.shape[1]}x{pixels.shape[0]} pixels "

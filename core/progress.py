@@ -48,15 +48,12 @@ class TileProgress:
     """Fraction done over a list of renders of unequal cost.
 
     A render costs its pixel-samples plus a fixed overhead (scene update, session reset,
-    image write), expressed in pixel-samples so both add up.
+    image write), expressed in pixel-samples so both add up (``RenderOptions.render_cost``).
     """
 
-    #: Fixed cost of one render in pixel-samples: ~5 ms at ~1.5 us per pixel-sample of fog.
-    OVERHEAD = 3000
-
-    def __init__(self, progress: Progress, costs: list[int]):
+    def __init__(self, progress: Progress, costs: list[int], overhead: int = 1024):
         self.progress = progress
-        self.costs = [cost + self.OVERHEAD for cost in costs]
+        self.costs = [cost + overhead for cost in costs]
         self.total = sum(self.costs) or 1
         self.done = 0
         self.count = 0

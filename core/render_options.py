@@ -30,7 +30,7 @@ class RenderOptions:
     min_spp
         The floor: every pixel gets at least this many samples (a pixel with none is black).
     tile_size
-        Edge of the square tiles the plan starts from, in pixels.
+        Edge of the square tiles the plan starts from, in pixels (split down to 8 where it pays).
     tile_quantile
         Which quantile of a tile's per-pixel targets the tile renders with; 1.0 (the maximum)
         means no pixel ever gets fewer samples than the map asks for.
@@ -44,6 +44,11 @@ class RenderOptions:
         Extra pixels rendered around each rectangle and cropped away. Cycles' pixel filter
         is importance-sampled (a pixel only sees its own samples), so 0 is seamless; see
         ``EXACT_MARGIN`` for bit-identity with a full-frame render.
+    render_cost
+        The fixed cost of one Cycles render (scene update, session reset, image write) in
+        pixel-samples: a tile is split into quadrants where that saves more samples than the
+        extra renders cost. About 4 ms per render against 2-6 us per pixel-sample of fog on
+        two CPU cores (bench/bench_selective.py); a huge value keeps whole tiles.
     adaptive_threshold
         None: every rectangle renders exactly its samples. A number: Cycles' adaptive sampling
         inside each rectangle, its samples as the ceiling and noise threshold
@@ -60,6 +65,7 @@ class RenderOptions:
     spp_levels: int = 0
     seed: int = 0
     margin: int = 0
+    render_cost: int = 1024
     adaptive_threshold: float | None = None
     resolution: tuple[int, int] | None = None
 
@@ -81,6 +87,8 @@ class RenderOptions:
             raise InputError(f"--seed must not be negative (got {self.seed})")
         if not 0 <= self.margin <= 64:
             raise InputError(f"--margin must be between 0 and 64 pixels (got {self.margin})")
+        if self.render_cost < 0:
+            raise InputError(f"--render-cost must not be negative (got {self.render_cost})")
         if self.adaptive_threshold is not None and not self.adaptive_threshold > 0.0:
             raise InputError(f"--adaptive-threshold must be positive (got {self.adaptive_threshold})")
         if self.resolution is not None:

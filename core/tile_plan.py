@@ -6,23 +6,25 @@ map." Per pixel that is ``target = max(min_spp, round(max_spp * map))``. Cycles 
 sample count per render, so:
 
 1. the frame is cut into square tiles (the last row and column may be narrower);
-2. each tile takes a high quantile of its pixels' targets; the default quantile 1.0 (the
-   maximum) means no pixel ever gets fewer samples than the map asks for;
-3. optionally the counts are rounded *up* to a few geometric levels (fewer distinct counts);
-4. neighbouring tiles with the same count are merged into larger rectangles (runs along each
-   tile row, then runs stacked over consecutive rows), so fewer renders pay the fixed cost.
+2. a rectangle renders with a high quantile of its pixels' targets; the default quantile 1.0
+   (the maximum) means no pixel ever gets fewer samples than the map asks for;
+3. a tile is split into quadrants (recursively, down to 8 px) where the samples this saves
+   outweigh the fixed cost of the extra renders (``RenderOptions.render_cost``);
+4. optionally the counts are rounded *up* to a few geometric levels (fewer distinct counts);
+5. neighbouring rectangles with the same count are merged into larger ones (runs along rows,
+   then along columns, repeated), so fewer renders pay the fixed cost.
 
 A ``TilePlan`` is plain data: its JSON lists independent rectangles (pixel bounds, rows from
 the top, half-open; samples) that a farm can split between machines in any way.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .errors import InputError
-from .render_options import RenderOptions
+from .render_options import MIN_TILE_SIZE, RenderOptions
 
 PLAN_FORMAT = 1
 
@@ -185,26 +187,6 @@ def target_spp(director_map: np.ndarray, max_spp: int, min_spp: int) -> np.ndarr
     return np.maximum(min_spp, np.rint(max_spp * np.asarray(director_map, np.float64))).astype(np.int32)
 
 
-def tile_spp(targets: np.ndarray, tile_size: int, quantile: float = 1.0) -> np.ndarray:
-    """Samples for each tile: the ``quantile`` of its pixels' targets (rounded to a pixel's value).
-
-    Returns an int32 array (tile rows, tile columns); edge tiles cover what is left of the frame.
-    ``quantile`` uses numpy's 'higher' method, so the result is always one of the tile's own
-    targets and at least the requested fraction of its pixels get their full target.
-    """
-    height, width = targets.shape
-    rows, cols = -(-height // tile_size), -(-width // tile_size)
-    padded = np.full((rows * tile_size, cols * tile_size), np.nan)
-    padded[:height, :width] = targets
-    blocks = padded.reshape(rows, tile_size, cols, tile_size).transpose(0, 2, 1, 3)
-    blocks = blocks.reshape(rows, cols, tile_size * tile_size)
-    if quantile >= 1.0:
-        spp = np.nanmax(blocks, axis=2)
-    else:
-        spp = np.nanquantile(blocks, quantile, axis=2, method="higher")
-    return spp.astype(np.int32)
-
-
 def spp_ladder(levels: int, min_spp: int, max_spp: int) -> np.ndarray:
     """``levels`` geometrically spaced sample counts from min_spp to max_spp (both included)."""
     ladder = np.rint(min_spp * (max_spp / min_spp) ** np.linspace(0.0, 1.0, levels))
@@ -216,34 +198,71 @@ def quantise_up(spp: np.ndarray, ladder: np.ndarray) -> np.ndarray:
     return ladder[np.searchsorted(ladder, spp, side="left")]
 
 
-def merge_tiles(grid: np.ndarray, tile_size: int, width: int, height: int) -> list[Rect]:
-    """Merge neighbouring tiles with equal samples into rectangles.
+def tile_windows(width: int, height: int, tile_size: int) -> list[tuple[int, int, int, int]]:
+    """(row0, row1, col0, col1) of the square tiles from the top left; edge tiles are cut."""
+    return [(row, min(height, row + tile_size), col, min(width, col + tile_size))
+            for row in range(0, height, tile_size) for col in range(0, width, tile_size)]
 
-    Greedy: within each tile row, runs of equal counts become strips; a strip continues the
-    rectangle above it when that one spans exactly the same columns with the same count.
-    Returns rectangles in pixel units, sorted top to bottom, left to right.
+
+def split_tile(targets: np.ndarray, window: tuple[int, int, int, int], quantile: float,
+               render_cost: int, ladder: np.ndarray | None = None) -> list[Rect]:
+    """A tile, or its quadrants (recursively, down to ``MIN_TILE_SIZE``), whichever is cheaper.
+
+    Cost of a rectangle = its pixels x its samples (the ``quantile`` of its targets) +
+    ``render_cost`` (the fixed cost of one Cycles render, in pixel-samples). A quadrant whose
+    pixels ask for fewer samples than the tile's most demanding pixel is rendered on its own
+    when the samples saved outweigh the extra render. With a ``ladder`` (``spp_ladder``) the
+    counts are rounded up to its levels before they are compared.
     """
-    done: list[tuple[int, int, int, int, int]] = []
-    open_rects: dict[tuple[int, int, int], int] = {}      # (col0, col1, spp) -> first tile row
-    rows, cols = grid.shape
-    for row in range(rows):
-        runs = []
-        start = 0
-        for col in range(1, cols + 1):
-            if col == cols or grid[row, col] != grid[row, start]:
-                runs.append((start, col, int(grid[row, start])))
-                start = col
-        still_open = {}
-        for run in runs:
-            still_open[run] = open_rects.pop(run, row)
-        for (c0, c1, spp), r0 in open_rects.items():
-            done.append((r0, row, c0, c1, spp))
-        open_rects = still_open
-    for (c0, c1, spp), r0 in open_rects.items():
-        done.append((r0, rows, c0, c1, spp))
-    rects = [Rect(r0 * tile_size, min(height, r1 * tile_size), c0 * tile_size,
-                  min(width, c1 * tile_size), spp) for r0, r1, c0, c1, spp in done]
-    return sorted(rects, key=lambda r: (r.row0, r.col0))
+    row0, row1, col0, col1 = window
+    block = targets[row0:row1, col0:col1]
+    spp = block.max() if quantile >= 1.0 else np.quantile(block, quantile, method="higher")
+    spp = int(spp if ladder is None else quantise_up(np.array([spp]), ladder)[0])
+    whole = Rect(row0, row1, col0, col1, spp)
+    height, width = row1 - row0, col1 - col0
+    if max(height, width) < 2 * MIN_TILE_SIZE:
+        return [whole]
+    rows = (row0, row0 + height // 2, row1) if height >= 2 * MIN_TILE_SIZE else (row0, row1)
+    cols = (col0, col0 + width // 2, col1) if width >= 2 * MIN_TILE_SIZE else (col0, col1)
+    parts = [rect for r in range(len(rows) - 1) for c in range(len(cols) - 1)
+             for rect in split_tile(targets, (rows[r], rows[r + 1], cols[c], cols[c + 1]),
+                                    quantile, render_cost, ladder)]
+    if sum(rect.samples + render_cost for rect in parts) < whole.samples + render_cost:
+        return parts
+    return [whole]
+
+
+def _merge_runs(rects: list[Rect], along_rows: bool) -> list[Rect]:
+    """One sweep: join each rectangle to the previous one when they continue each other."""
+    def key(rect: Rect):
+        return (rect.row0, rect.row1, rect.spp, rect.col0) if along_rows else (rect.col0, rect.col1, rect.spp, rect.row0)
+
+    merged: list[Rect] = []
+    for rect in sorted(rects, key=key):
+        last = merged[-1] if merged else None
+        if last is None or last.spp != rect.spp:
+            merged.append(rect)
+        elif along_rows and (last.row0, last.row1, last.col1) == (rect.row0, rect.row1, rect.col0):
+            merged[-1] = replace(last, col1=rect.col1)
+        elif not along_rows and (last.col0, last.col1, last.row1) == (rect.col0, rect.col1, rect.row0):
+            merged[-1] = replace(last, row1=rect.row1)
+        else:
+            merged.append(rect)
+    return merged
+
+
+def merge_rects(rects: list[Rect]) -> list[Rect]:
+    """Merge rectangles with equal samples that share a whole edge, until none do.
+
+    Greedy: runs along rows (same rows, touching columns), then runs along columns (same
+    columns, touching rows), repeated while it helps. Returns rectangles sorted top to
+    bottom, left to right.
+    """
+    count = None
+    while count != len(rects):
+        count = len(rects)
+        rects = _merge_runs(_merge_runs(rects, along_rows=True), along_rows=False)
+    return sorted(rects, key=lambda rect: (rect.row0, rect.col0))
 
 
 def make_plan(director_map: np.ndarray, options: RenderOptions) -> TilePlan:
@@ -257,10 +276,10 @@ def make_plan(director_map: np.ndarray, options: RenderOptions) -> TilePlan:
     options.check_frame(width, height)
     data = check_director_map(director_map, width, height)
     targets = target_spp(data, options.max_spp, options.min_spp)
-    grid = tile_spp(targets, options.tile_size, options.tile_quantile)
-    if options.spp_levels:
-        grid = quantise_up(grid, spp_ladder(options.spp_levels, options.min_spp, options.max_spp))
-    rects = merge_tiles(grid, options.tile_size, width, height)
+    ladder = spp_ladder(options.spp_levels, options.min_spp, options.max_spp) if options.spp_levels else None
+    rects = [rect for window in tile_windows(width, height, options.tile_size)
+             for rect in split_tile(targets, window, options.tile_quantile, options.render_cost, ladder)]
+    rects = merge_rects(rects)
     plan = TilePlan(width=width, height=height, max_spp=options.max_spp, min_spp=options.min_spp,
                     tile_size=options.tile_size, tile_quantile=options.tile_quantile,
                     spp_levels=options.spp_levels, rects=rects,

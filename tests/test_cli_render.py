@@ -122,3 +122,26 @@ def test_bad_input_found_in_the_scene(cli, blender, fog_blend, tmp_path, extra, 
 def test_not_an_exr_output(cli, tmp_path):
     result = cli("render", tmp_path / "x.blend", "--mode", "gold", "--max-spp", "4", "--out", tmp_path / "o.png")
     assert "--out must name an .exr file" in one_line_error(result)
+
+
+@pytest.mark.render
+def test_ctrl_c_cancels_between_tiles_and_writes_nothing(fog_blend, tmp_path):
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    map_path = write_exr(tmp_path / "xsl.exr", radial_map(W, H, 0.5))
+    exe = Path(sys.executable).with_name("xsl-render")
+    process = subprocess.Popen(
+        [str(exe), "render", str(fog_blend), "--mode", "xsl", "--max-spp", "256", "--tile-size", "8",
+         "--map", str(map_path),
+         "--out", str(tmp_path / "o.exr"), "--stats", str(tmp_path / "o.json")],
+        stderr=subprocess.PIPE, text=True)
+    first = process.stderr.readline()             # the progress bar's first line: rendering began
+    assert "tile 1/" in first, first
+    process.send_signal(signal.SIGINT)
+    rest = process.communicate(timeout=60)[1]
+    assert process.returncode == 130, rest
+    assert "xsl-render: cancelled" in rest
+    assert not list(tmp_path.glob("o*"))

@@ -9,8 +9,10 @@ import pytest
 from xsl_render.core.camera import CameraModel, border_for_window
 from xsl_render.core.errors import InputError
 from xsl_render.core.render_options import RenderOptions, parse_resolution
-from xsl_render.core.tile_plan import (Rect, TilePlan, check_director_map, make_plan, merge_tiles,
-                                       quantise_up, spp_ladder, target_spp, tile_spp)
+from xsl_render.core.tile_plan import (Rect, TilePlan, check_director_map, make_plan, merge_rects,
+                                       quantise_up, split_tile, spp_ladder, target_spp, tile_windows)
+
+WHOLE = 10 ** 12            # a render cost that never pays for splitting a tile
 
 
 def random_map(height, width, seed=0, smooth=True):
@@ -33,30 +35,51 @@ def test_target_is_the_papers_weighting_with_a_floor(max_spp, min_spp):
     assert targets.max() == max_spp and targets.min() >= min_spp
 
 
+def tile_grid(targets, tile_size, quantile=1.0, render_cost=WHOLE):
+    height, width = targets.shape
+    return [rect for window in tile_windows(width, height, tile_size)
+            for rect in split_tile(targets, window, quantile, render_cost)]
+
+
+def grid_rects(grid, tile_size, width, height):
+    return [Rect(r * tile_size, min(height, (r + 1) * tile_size), c * tile_size,
+                 min(width, (c + 1) * tile_size), int(grid[r, c]))
+            for r in range(grid.shape[0]) for c in range(grid.shape[1])]
+
+
 def test_tile_takes_the_maximum_by_default():
     targets = np.ones((64, 64), np.int32)
     targets[5, 40] = 50                     # one salient pixel in tile (0, 1)
-    grid = tile_spp(targets, 32, 1.0)
-    np.testing.assert_array_equal(grid, [[1, 50], [1, 1]])
+    assert [rect.spp for rect in tile_grid(targets, 32)] == [1, 50, 1, 1]
 
 
 @pytest.mark.parametrize("quantile", [0.5, 0.9, 0.95, 1.0])
 def test_tile_quantile_starves_at_most_the_rest(quantile):
     targets = target_spp(random_map(96, 128, smooth=False), 64, 1)
-    grid = tile_spp(targets, 16, quantile)
-    for r in range(grid.shape[0]):
-        for c in range(grid.shape[1]):
-            block = targets[16 * r:16 * r + 16, 16 * c:16 * c + 16]
-            assert grid[r, c] in block                       # an actual pixel's target
-            assert (block <= grid[r, c]).mean() >= quantile  # at least that share fully served
+    for rect in tile_grid(targets, 16, quantile):
+        block = targets[rect.row0:rect.row1, rect.col0:rect.col1]
+        assert rect.spp in block                                # an actual pixel's target
+        assert (block <= rect.spp).mean() >= quantile           # at least that share fully served
 
 
 def test_partial_edge_tiles_only_look_at_their_own_pixels():
     targets = np.ones((40, 70), np.int32)
     targets[39, 69] = 9
-    grid = tile_spp(targets, 32, 1.0)
-    assert grid.shape == (2, 3)
-    np.testing.assert_array_equal(grid, [[1, 1, 1], [1, 1, 9]])
+    rects = tile_grid(targets, 32)
+    assert [rect.window for rect in rects][-1] == (32, 40, 64, 70)
+    assert [rect.spp for rect in rects] == [1, 1, 1, 1, 1, 9]
+
+
+@pytest.mark.parametrize("render_cost,renders", [(0, 7), (3000, 7), (5000, 4), (20000, 1), (WHOLE, 1)])
+def test_tiles_split_where_the_samples_saved_pay_for_the_renders(render_cost, renders):
+    targets = np.ones((32, 32), np.int32)
+    targets[3, 3] = 64                      # one salient pixel in the top-left 8x8 corner
+    rects = split_tile(targets, (0, 32, 0, 32), 1.0, render_cost)
+    assert len(rects) == renders
+    salient = [rect for rect in rects if rect.spp == 64]
+    assert len(salient) == 1 and (salient[0].row0, salient[0].col0) == (0, 0)
+    if renders == 7:                        # quadrants of quadrants: 3 of 16 px, 4 of 8 px
+        assert salient[0].area == 64 and sum(r.samples for r in rects) == 64 * 64 + 1024 - 64
 
 
 def test_equal_tiles_merge_into_one_rectangle():
@@ -68,14 +91,14 @@ def test_merging_runs_and_stacks():
     grid = np.array([[1, 1, 2, 2],
                      [1, 1, 2, 3],
                      [4, 4, 4, 4]], np.int32)
-    rects = merge_tiles(grid, 10, width=35, height=25)
+    rects = merge_rects(grid_rects(grid, 10, width=35, height=25))
     assert rects == [Rect(0, 20, 0, 20, 1), Rect(0, 10, 20, 35, 2), Rect(10, 20, 20, 30, 2),
                      Rect(10, 20, 30, 35, 3), Rect(20, 25, 0, 35, 4)]
 
 
 def test_checkerboard_does_not_merge():
     grid = (np.indices((3, 4)).sum(0) % 2 + 1).astype(np.int32)
-    assert len(merge_tiles(grid, 8, 32, 24)) == 12
+    assert len(merge_rects(grid_rects(grid, 8, 32, 24))) == 12
 
 
 @pytest.mark.parametrize("height,width,tile,quantile,levels,seed", [
@@ -95,7 +118,10 @@ def test_plan_covers_the_frame_once_and_never_starves(height, width, tile, quant
     assert plan.target_samples == int(targets.sum())
     if quantile == 1.0:
         assert (spp >= targets).all()
-    assert len(plan.rects) <= -(-height // tile) * -(-width // tile)
+    unsplit = make_plan(data, RenderOptions(max_spp=64, min_spp=2, tile_size=tile, tile_quantile=quantile,
+                                            spp_levels=levels, render_cost=WHOLE))
+    assert len(unsplit.rects) <= -(-height // tile) * -(-width // tile)
+    assert plan.total_samples + 1024 * len(plan.rects) <= unsplit.total_samples + 1024 * len(unsplit.rects)
     if levels:
         assert len({rect.spp for rect in plan.rects}) <= levels
 
@@ -150,7 +176,7 @@ def test_grey_rgba_map_is_accepted():
     ({"max_spp": 0}, "max-spp"), ({"min_spp": 0}, "min-spp"), ({"min_spp": 65}, "larger than"),
     ({"tile_size": 4}, "tile-size"), ({"tile_quantile": 0.0}, "quantile"),
     ({"spp_levels": 1}, "spp-levels"), ({"seed": -1}, "seed"), ({"margin": 100}, "margin"),
-    ({"adaptive_threshold": 0.0}, "adaptive-threshold"), ({"resolution": (0, 10)}, "resolution")])
+    ({"render_cost": -1}, "render-cost"), ({"adaptive_threshold": 0.0}, "adaptive-threshold"), ({"resolution": (0, 10)}, "resolution")])
 def test_bad_options(changes, message):
     options = RenderOptions(**({"max_spp": 64} | changes))
     with pytest.raises(InputError, match=message):

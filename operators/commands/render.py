@@ -41,6 +41,9 @@ def add_arguments(parser) -> None:
     tiles.add_argument("--margin", type=int, default=0,
                        help="pixels rendered around each rectangle and cropped (default 0; "
                             "10 = bit-identical to a full-frame render)")
+    tiles.add_argument("--render-cost", type=int, default=1024,
+                       help="fixed cost of one render in pixel-samples; tiles split down to 8 px "
+                            "where that saves more (default 1024)")
     tiles.add_argument("--adaptive-threshold", type=float,
                        help="Cycles adaptive sampling inside each rectangle, noise threshold "
                             "T / sqrt(spp / max-spp) (default: off)")
@@ -64,7 +67,7 @@ def _options(args):
     return RenderOptions(
         max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
-        margin=args.margin, adaptive_threshold=args.adaptive_threshold,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
         resolution=parse_resolution(args.resolution) if args.resolution else None).check()
 
 
@@ -137,23 +140,26 @@ def run(args) -> int:
 
     from ...addon import selective_render as sr
     from ...addon.blend_session import open_blend
+    from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
 
     scene = open_blend(args.scene, args.scene_name)
     bar = None if args.quiet else ProgressBar(args.mode)
     try:
-        if args.mode == "gold":
-            outcome = sr.render_gold(scene, options, progress=bar)
-        elif args.mode in ("xs", "xsl"):
-            outcome = sr.render_selective(scene, director_map, options, progress=bar, mode=args.mode,
-                                          map_seconds=map_seconds)
-        elif args.mode == "uniform":
-            outcome = sr.render_uniform(scene, options, spp=budget.get("spp"),
-                                        seconds=budget.get("seconds"), progress=bar)
-        else:
-            threshold = args.noise_threshold if args.noise_threshold is not None \
-                else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
-            outcome = sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=bar)
+        with InterruptToCancel() as interrupt:
+            progress = interrupt.wrap(bar)
+            if args.mode == "gold":
+                outcome = sr.render_gold(scene, options, progress=progress)
+            elif args.mode in ("xs", "xsl"):
+                outcome = sr.render_selective(scene, director_map, options, progress=progress,
+                                              mode=args.mode, map_seconds=map_seconds)
+            elif args.mode == "uniform":
+                outcome = sr.render_uniform(scene, options, spp=budget.get("spp"),
+                                            seconds=budget.get("seconds"), progress=progress)
+            else:
+                threshold = args.noise_threshold if args.noise_threshold is not None \
+                    else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
+                outcome = sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=progress)
     finally:
         if bar is not None:
             bar.close()
