@@ -188,8 +188,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         stats = _stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
     stats.update(extra or {})
     if time_budget is not None:
+        # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not
+        # adaptive sampling finding every pixel converged).
         stats.update(time_budget_s=time_budget, time_limit_s=time_limit,
-                     stopped_by_time=rendered.samples_rendered < samples)
+                     stopped_by_time=rendered.samples_rendered < samples
+                     and rendered.seconds >= 0.9 * time_limit)
     return RenderOutcome(rendered.pixels, per_pixel, stats, warnings)
 
 
