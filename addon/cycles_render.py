@@ -24,6 +24,8 @@ PASSES = {
     "Normal": ("use_pass_normal", "Normal", "XYZ"),
     "Emit": ("use_pass_emit", "Emission", "RGB"),
     "Object Index": ("use_pass_object_index", "Object Index", "X"),
+    # Samples taken per pixel / samples rendered (view_layer.cycles.pass_debug_sample_count).
+    "Debug Sample Count": (None, "Debug Sample Count", "X"),
 }
 
 
@@ -68,20 +70,24 @@ def render_passes(scene, passes: tuple[str, ...] = ("Combined",), view_layer=Non
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """Read named passes of one view layer from a Blender multilayer EXR.
+def read_exr_parts(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict[str, object]]:
+    """Every channel of every part of an EXR by name, and the first part's header attributes.
 
-    Blender 5 writes each pass as its own part (subimage); older versions put all channels
-    in one part. Both are handled by collecting channels over every part.
+    Blender 5 writes each pass of a multilayer EXR as its own part (subimage); older versions
+    put all channels in one part. Cycles puts its render statistics in the header
+    (``cycles.<view layer>.samples``, ``...render_time``).
     """
     image = oiio.ImageInput.open(str(path))
     if image is None:
         raise InputError(f"cannot read {path}: {oiio.geterror()}")
     channels: dict[str, np.ndarray] = {}
+    attributes: dict[str, object] = {}
     try:
         subimage = 0
         while image.seek_subimage(subimage, 0):
             spec = image.spec()
+            if subimage == 0:
+                attributes = {attr.name: attr.value for attr in spec.extra_attribs}
             pixels = image.read_image(subimage, 0, 0, spec.nchannels, oiio.FLOAT)
             pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, spec.nchannels)
             for i, name in enumerate(spec.channelnames):
@@ -89,12 +95,26 @@ def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]
             subimage += 1
     finally:
         image.close()
+    return channels, attributes
+
+
+def read_multilayer(path: str | os.PathLike, layer: str, passes: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Read named passes of one view layer from a Blender multilayer EXR (or a plain EXR of
+    the Combined pass, whose channels are just R, G, B, A)."""
+    channels, _ = read_exr_parts(path)
+    return passes_from_channels(channels, layer, passes)
+
+
+def passes_from_channels(channels: dict[str, np.ndarray], layer: str,
+                         passes: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Named passes as (H, W, C) float32 arrays from the channels ``read_exr_parts`` found."""
     out = {}
     for name in passes:
         _, exr_name, wanted = PASSES.get(name, (None, name, "RGBA"))
         found = []
         for c in wanted:
-            for candidate in (f"{layer}.{exr_name}.{c}", f"{exr_name}.{c}"):
+            for candidate in ((f"{layer}.{exr_name}.{c}", f"{exr_name}.{c}")
+                              + ((c,) if name == "Combined" else ())):
                 if candidate in channels:
                     found.append(channels[candidate])
                     break

@@ -201,3 +201,24 @@ class CameraModel:
             inside = ((col >= -margin) & (col <= self.width + margin)
                       & (row >= -margin) & (row <= self.height + margin))
             return inside & (depth > self.clip_start) & (depth < self.clip_end)
+
+
+def border_for_window(window: tuple[int, int, int, int], width: int, height: int,
+                      ) -> tuple[float, float, float, float]:
+    """Blender's render border (min_x, min_y, max_x, max_y) that renders exactly ``window``.
+
+    ``window`` is (row0, row1, col0, col1), rows from the top, half-open. Blender and Cycles
+    turn border fractions into pixels by truncation and ``pixel_window`` above by rounding;
+    a fraction 0.3 px past each pixel edge gives the same pixel both ways (and survives
+    float32), and the frame's far edge is exactly 1.
+    """
+    row0, row1, col0, col1 = window
+    if not (0 <= row0 < row1 <= height and 0 <= col0 < col1 <= width):
+        raise ValueError(f"window {window} lies outside the {width}x{height} frame")
+
+    def fraction(pixel: int, size: int) -> float:
+        return 1.0 if pixel >= size else (pixel + 0.3) / size
+
+    # Blender's y counts up from the bottom: rows [row0, row1) are y in [height-row1, height-row0).
+    return (fraction(col0, width), fraction(height - row1, height),
+            fraction(col1, width), fraction(height - row0, height))

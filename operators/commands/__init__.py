@@ -1,4 +1,6 @@
 """Subcommands of ``xsl-render``; each module has NAME, HELP, add_arguments() and run()."""
-from . import compare, experiment_analyse, experiment_serve, hotspots, info, maps, saliency, xmap
+from . import (compare, experiment_analyse, experiment_serve, hotspots, info, maps, render,
+               saliency, xmap)
 
-COMMANDS = [info, maps, xmap, saliency, compare, experiment_serve, experiment_analyse, hotspots]
+COMMANDS = [info, maps, xmap, saliency, render, compare, experiment_serve, experiment_analyse,
+            hotspots]

@@ -1,0 +1,239 @@
+"""Selective rendering (the paper's section 5) and the baselines it is measured against.
+
+``render_selective(scene, director_map, options)`` is the core: the director map (values in
+[0, 1] at render resolution) scales ``options.max_spp`` per pixel; ``core.tile_plan`` turns
+that into rectangles, each rendered by Cycles with its own samples, and ``core.composite``
+puts them together. The baselines:
+
+- ``render_gold``: ``max_spp`` everywhere, one ordinary Cycles render (the gold standard);
+- ``render_uniform``: one ordinary render with the same total samples as a selective run
+  (equal cost), or for a given wall time (Cycles' time limit);
+- ``render_adaptive``: Cycles' own adaptive sampling (noise threshold, ``max_spp`` as the
+  ceiling) stopped by Cycles' time limit at the wall time of a selective run: what a Blender
+  user would do instead.
+
+Every function leaves the scene exactly as it found it (``preserved_scene``), after success,
+an error or a cancel, and returns a ``RenderOutcome``: the image, the samples per pixel and
+the statistics of the run (the ``--stats`` JSON).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.composite import Compositor, crop, render_window
+from ..core.errors import InputError
+from ..core.progress import Progress, ProgressCallback, TileProgress
+from ..core.render_options import RenderOptions
+from ..core.tile_plan import check_director_map, make_plan
+from .scene_probe import camera_model, render_size
+from .scene_state import preserved_scene
+from .tile_render import CyclesWindowRenderer
+
+#: Cycles' own default noise threshold, what an artist switching adaptive sampling on gets.
+CYCLES_DEFAULT_NOISE_THRESHOLD = 0.01
+#: Window rendered at 1 sample before a time-limited render, so that the scene sync and BVH
+#: build (which Cycles' time limit does not count) are paid inside the budget, not on top.
+_WARMUP_SIZE = 8
+
+
+@dataclass
+class RenderOutcome:
+    """What one run produced."""
+
+    image: np.ndarray                       # (H, W, 4) float32 RGBA, row 0 at the top
+    samples: np.ndarray                     # (H, W) float32 samples per pixel
+    stats: dict
+    warnings: list[str] = field(default_factory=list)
+
+
+def _prepare(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
+    """Apply the resolution option, check the camera, warn about a non-Cycles engine.
+
+    Must run inside ``preserved_scene``. Returns (width, height, warnings).
+    """
+    options.check()
+    if options.resolution is not None:
+        scene.render.resolution_x, scene.render.resolution_y = options.resolution
+        scene.render.resolution_percentage = 100
+    camera_model(scene)                     # InputError for a missing or non-camera camera
+    warnings = []
+    if scene.render.engine != "CYCLES":
+        warnings.append(f"scene '{scene.name}' renders with {scene.render.engine}; this run "
+                        f"uses Cycles (the scene keeps {scene.render.engine})")
+    width, height = render_size(scene)
+    return width, height, warnings
+
+
+def _stats(mode: str, scene, options: RenderOptions, width: int, height: int,
+           samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str]) -> dict:
+    total = float(samples.sum(dtype=np.float64))
+    return {
+        "mode": mode,
+        "scene": scene.name,
+        "resolution": [width, height],
+        "max_spp": options.max_spp,
+        "seed": options.seed,
+        "wall_s": sum(phases.values()),
+        "phases_s": phases,
+        "total_samples": int(round(total)),
+        "mean_spp": total / (width * height),
+        "gold_samples": width * height * options.max_spp,
+        "renders": len(tiles),
+        "tiles": tiles,
+        "options": options.to_dict(),
+        "warnings": warnings,
+    }
+
+
+def _tile_entry(window, rendered) -> dict:
+    row0, row1, col0, col1 = window
+    return {"row0": row0, "row1": row1, "col0": col0, "col1": col1,
+            "spp": rendered.samples_set, "samples_rendered": rendered.samples_rendered,
+            "mean_spp": float(np.mean(rendered.samples)), "seconds": rendered.seconds}
+
+
+def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
+                     progress: ProgressCallback | None = None, mode: str = "xsl",
+                     map_seconds: float = 0.0) -> RenderOutcome:
+    """Render ``scene`` with samples per pixel set by ``director_map`` (section 5 of the paper).
+
+    Parameters
+    ----------
+    scene
+        A Blender scene with an active camera (any engine: Cycles is used and the engine put back).
+    director_map
+        (H, W) values in [0, 1] at the render resolution (after ``options.resolution``).
+    options
+        Ceiling, floor, tiles, seed, margin, optional per-rectangle adaptive sampling.
+    progress
+        ``callback(fraction, message)``; returning True cancels between two renders.
+    mode
+        Name recorded in the statistics ("xs", "xsl", ...).
+    map_seconds
+        Time already spent making the map, recorded as the "maps" phase.
+    """
+    report = Progress(progress)
+    with preserved_scene(scene):
+        width, height, warnings = _prepare(scene, options)
+        started = time.perf_counter()
+        data = check_director_map(director_map, width, height)
+        plan = make_plan(data, options)
+        phases = {"maps": map_seconds, "plan": time.perf_counter() - started}
+        tracker = TileProgress(report, [rect.samples for rect in plan.rects], options.render_cost)
+        compositor = Compositor(width, height)
+        tiles, composite_s = [], 0.0
+        started = time.perf_counter()
+        with CyclesWindowRenderer(scene, options.seed) as renderer:
+            for rect in plan.rects:
+                tracker.start(rect.spp)
+                window = render_window(rect.window, options.margin, width, height)
+                threshold = None
+                if options.adaptive_threshold is not None:
+                    threshold = options.adaptive_threshold / math.sqrt(rect.spp / options.max_spp)
+                rendered = renderer.render(window, rect.spp, adaptive_threshold=threshold)
+                placed = time.perf_counter()
+                samples = rendered.samples
+                if isinstance(samples, np.ndarray):
+                    samples = crop(samples, window, rect.window)
+                compositor.add(rect.window, crop(rendered.pixels, window, rect.window), samples)
+                composite_s += time.perf_counter() - placed
+                tiles.append(_tile_entry(rect.window, rendered) | {"window": list(window)})
+                tracker.finish()
+        phases["renders"] = time.perf_counter() - started - composite_s
+        started = time.perf_counter()
+        image, samples = compositor.result()
+        phases["composite"] = composite_s + time.perf_counter() - started
+        stats = _stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
+    stats["plan"] = plan.to_dict()
+    stats["ideal_speedup"] = plan.ideal_speedup
+    stats["director_map_mean"] = float(data.mean())
+    return RenderOutcome(image, samples, stats, warnings)
+
+
+def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressCallback | None,
+                   samples: int, time_budget: float | None = None,
+                   adaptive_threshold: float | None = None, extra: dict | None = None) -> RenderOutcome:
+    """One ordinary Cycles render of the whole frame (optionally time-limited)."""
+    report = Progress(progress)
+    with preserved_scene(scene):
+        width, height, warnings = _prepare(scene, options)
+        phases = {"maps": 0.0}
+        started = time.perf_counter()
+        tiles = []
+        with CyclesWindowRenderer(scene, options.seed) as renderer:
+            report.update(0.0, f"{mode}: rendering")
+            time_limit = 0.0
+            if time_budget is not None:
+                # Sync the scene (persistent data) inside the budget, then give Cycles the rest.
+                row, col = (height - min(height, _WARMUP_SIZE)) // 2, (width - min(width, _WARMUP_SIZE)) // 2
+                renderer.render((row, row + min(height, _WARMUP_SIZE), col, col + min(width, _WARMUP_SIZE)), 1)
+                time_limit = max(0.01, time_budget - (time.perf_counter() - started))
+                began = time.perf_counter()
+
+                def on_sample(done, total):
+                    report.note((time.perf_counter() - began) / time_limit, f"{mode}: sample {done}")
+            else:
+                def on_sample(done, total):
+                    report.note(done / max(1, total), f"{mode}: sample {done}/{total}")
+            rendered = renderer.render(None, samples, adaptive_threshold=adaptive_threshold,
+                                       time_limit=time_limit, on_sample=on_sample)
+            tiles.append(_tile_entry((0, height, 0, width), rendered))
+        phases["renders"] = time.perf_counter() - started
+        report.update(1.0, f"{mode}: done")
+        per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
+        stats = _stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
+    stats.update(extra or {})
+    if time_budget is not None:
+        # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not
+        # adaptive sampling finding every pixel converged).
+        stats.update(time_budget_s=time_budget, time_limit_s=time_limit,
+                     stopped_by_time=rendered.samples_rendered < samples
+                     and rendered.seconds >= 0.9 * time_limit)
+    return RenderOutcome(rendered.pixels, per_pixel, stats, warnings)
+
+
+def render_gold(scene, options: RenderOptions, progress: ProgressCallback | None = None) -> RenderOutcome:
+    """The gold standard: ``options.max_spp`` samples in every pixel, one ordinary render."""
+    return _single_render(scene, options, "gold", progress, options.max_spp)
+
+
+def render_uniform(scene, options: RenderOptions, spp: int | None = None, seconds: float | None = None,
+                   progress: ProgressCallback | None = None) -> RenderOutcome:
+    """The same samples in every pixel: ``spp`` of them (equal cost: the selective run's
+    mean), or as many as fit in ``seconds`` of wall time (at most ``options.max_spp``)."""
+    if (spp is None) == (seconds is None):
+        raise InputError("uniform mode needs either a sample count or a time budget")
+    if spp is not None:
+        if spp < 1:
+            raise InputError(f"uniform samples per pixel must be at least 1 (got {spp})")
+        return _single_render(scene, options, "uniform", progress, spp, extra={"budget": "samples"})
+    if not seconds > 0:
+        raise InputError(f"the time budget must be positive (got {seconds})")
+    return _single_render(scene, options, "uniform", progress, options.max_spp, time_budget=seconds,
+                          extra={"budget": "time"})
+
+
+def render_adaptive(scene, options: RenderOptions, seconds: float,
+                    noise_threshold: float = CYCLES_DEFAULT_NOISE_THRESHOLD,
+                    progress: ProgressCallback | None = None) -> RenderOutcome:
+    """Cycles' adaptive sampling with ``max_spp`` as the ceiling, stopped at ``seconds`` of wall
+    time by Cycles' time limit (it may finish sooner if every pixel reaches the threshold).
+
+    Why the time limit and not a tuned threshold: the threshold that makes Cycles finish in
+    exactly ``seconds`` can only be found by trial renders, which cost more than the budget;
+    the time limit meets it in one render. The scene is synced by a 1-sample render of a few
+    pixels first (persistent data keeps it), so the sync that Cycles' limit does not count
+    is paid inside the budget. The threshold is Cycles' default unless given: what an artist
+    who switches on adaptive sampling and a time limit gets.
+    """
+    if not seconds > 0:
+        raise InputError(f"the time budget must be positive (got {seconds})")
+    if not noise_threshold > 0:
+        raise InputError(f"--noise-threshold must be positive (got {noise_threshold})")
+    return _single_render(scene, options, "adaptive", progress, options.max_spp, time_budget=seconds,
+                          adaptive_threshold=noise_threshold,
+                          extra={"budget": "time", "noise_threshold": noise_threshold})

@@ -1,0 +1,208 @@
+"""Render windows of the frame with Cycles, many times in a row, with little fixed cost.
+
+One ``CyclesWindowRenderer`` per run, used inside ``addon.scene_state.preserved_scene``
+(every setting changed here is put back by that block):
+
+- persistent data on, so the scene is synced and its BVH built once for all windows;
+- a render border cropped to the window for each render; one temporary folder for all;
+- a plain EXR of the Combined pass (a multilayer one with Cycles' sample-count pass when
+  adaptive sampling or a time limit makes the count per pixel unknown in advance);
+- a fixed seed, no denoiser, no time limit, no per-view-layer samples, no compositor, no
+  sequencer, no stamp: the pixels are Cycles' own path-traced estimate, reproducible.
+
+Changing ``scene.cycles.samples`` (an add-on property) does not tag the scene for a depsgraph
+update, so with persistent data Cycles kept rendering the old count; every render therefore
+tags the scene first, and the count Cycles reports in the EXR header is checked against the
+one asked for.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..core.camera import border_for_window
+from ..core.errors import InputError
+from .cycles_render import ensure_cycles, passes_from_channels, read_exr_parts
+from .scene_probe import render_size
+
+_SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
+
+
+@dataclass
+class RenderedWindow:
+    """Pixels of one render and what it cost."""
+
+    window: tuple[int, int, int, int] | None     # None: the whole frame
+    pixels: np.ndarray                           # (h, w, 4) float32 RGBA, row 0 at the top
+    samples: np.ndarray | int                    # samples per pixel: a number, or (h, w) counts
+    samples_set: int                             # scene.cycles.samples for this render
+    samples_rendered: int                        # passes Cycles completed (< set when stopped early)
+    samples_reported: int | None                 # the count in the EXR header Cycles wrote
+    seconds: float                               # wall time of the render call
+
+
+def render_layer(scene):
+    """The view layer we render: the active one when it is enabled, else the first enabled."""
+    import bpy
+
+    active = getattr(bpy.context, "view_layer", None)
+    if active is not None and scene.view_layers.get(active.name) == active and active.use:
+        return active
+    for layer in scene.view_layers:
+        if layer.use:
+            return layer
+    raise InputError(f"scene '{scene.name}' has no view layer enabled for rendering")
+
+
+class CyclesWindowRenderer:
+    """Cycles renders of windows (or the whole frame) with fixed, reproducible settings.
+
+    Parameters
+    ----------
+    scene
+        The scene; must be inside ``preserved_scene`` for the renderer's whole life.
+    seed
+        Cycles' seed for every render.
+    """
+
+    def __init__(self, scene, seed: int):
+        self.scene = scene
+        self.layer = render_layer(scene)
+        self.width, self.height = render_size(scene)
+        ensure_cycles(scene)
+        cycles, render = scene.cycles, scene.render
+        render.use_persistent_data = True
+        cycles.use_denoising = False
+        cycles.use_adaptive_sampling = False
+        cycles.time_limit = 0.0
+        cycles.use_layer_samples = "IGNORE"
+        cycles.use_sample_subset = False
+        cycles.sample_offset = 0
+        cycles.use_animated_seed = False
+        cycles.seed = seed
+        render.use_compositing = False
+        render.use_sequencer = False
+        render.use_stamp = False
+        render.use_file_extension = True
+        self.folder = Path(tempfile.mkdtemp(prefix="xsl-tiles-"))
+        render.filepath = str(self.folder / "window")
+        self._status_max = 0
+        self._on_sample: Callable[[int, int], None] | None = None
+        self._handler = self._render_status
+
+    # -- context manager -------------------------------------------------------------------
+    def __enter__(self) -> "CyclesWindowRenderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+    def _render_status(self, status, *_):
+        # Cycles reports "... | Sample 16/64" while it renders; the highest number is the
+        # count it completed when a time limit or adaptive sampling stops it early.
+        match = _SAMPLE_STATUS.search(str(status))
+        if match:
+            done, total = int(match.group(1)), int(match.group(2))
+            self._status_max = max(self._status_max, done)
+            if self._on_sample is not None:
+                self._on_sample(done, total)
+
+    # -- rendering -------------------------------------------------------------------------
+    @staticmethod
+    def _assign(struct, name: str, value) -> bool:
+        """Set a property only when it changes (every assignment makes Cycles re-check that
+        part of the scene); True when it changed."""
+        if getattr(struct, name) == value:
+            return False
+        setattr(struct, name, value)
+        return True
+
+    def _set_output(self, multilayer: bool) -> None:
+        settings = self.scene.render.image_settings
+        if hasattr(settings, "media_type"):        # Blender 5.0+: the format follows the media type
+            self._assign(settings, "media_type", "MULTI_LAYER_IMAGE" if multilayer else "IMAGE")
+        self._assign(settings, "file_format", "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR")
+        self._assign(settings, "color_mode", "RGBA")
+        self._assign(settings, "color_depth", "32")
+        self._assign(settings, "exr_codec", "NONE")    # small temporary files: skip compression
+
+    def render(self, window: tuple[int, int, int, int] | None, samples: int,
+               adaptive_threshold: float | None = None, time_limit: float = 0.0,
+               on_sample: Callable[[int, int], None] | None = None) -> RenderedWindow:
+        """Render ``window`` (row0, row1, col0, col1; rows from the top) or the whole frame.
+
+        ``samples`` is Cycles' sample count (the ceiling when ``adaptive_threshold`` or
+        ``time_limit`` may stop it earlier; then the returned ``samples`` holds Cycles' own
+        count per pixel). ``on_sample(done, total)`` is called as Cycles reports progress.
+        """
+        import bpy
+
+        scene, cycles, render = self.scene, self.scene.cycles, self.scene.render
+        counted = adaptive_threshold is not None or time_limit > 0.0
+        changed = [self._assign(cycles, "samples", samples),
+                   self._assign(cycles, "use_adaptive_sampling", adaptive_threshold is not None),
+                   self._assign(cycles, "time_limit", time_limit),
+                   self._assign(self.layer.cycles, "pass_debug_sample_count", counted)]
+        if adaptive_threshold is not None:
+            changed.append(self._assign(cycles, "adaptive_threshold", adaptive_threshold))
+        self._set_output(multilayer=counted)
+        if window is None:
+            self._assign(render, "use_border", False)
+            shape = (self.height, self.width)
+        else:
+            border = border_for_window(window, self.width, self.height)
+            for name, value in zip(("border_min_x", "border_min_y", "border_max_x", "border_max_y"), border):
+                self._assign(render, name, value)
+            self._assign(render, "use_border", True)
+            self._assign(render, "use_crop_to_border", True)
+            shape = (window[1] - window[0], window[3] - window[2])
+        if any(changed):
+            scene.update_tag()      # see the module docstring: add-on properties do not tag it
+        for old in self.folder.glob("window*"):
+            old.unlink()
+        self._status_max, self._on_sample = 0, on_sample
+        # Cycles' status lines cost ~2 ms per render through a Python handler: listen only
+        # when the count it completed or the progress is wanted.
+        listen = counted or on_sample is not None
+        if listen:
+            bpy.app.handlers.render_stats.append(self._handler)
+        started = time.perf_counter()
+        try:
+            result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
+        finally:
+            self._on_sample = None
+            if listen:
+                bpy.app.handlers.render_stats.remove(self._handler)
+        seconds = time.perf_counter() - started
+        if "FINISHED" not in result:
+            raise RuntimeError(f"Cycles did not finish the render ({result})")
+        files = sorted(self.folder.glob("window*.exr"))
+        if not files:
+            raise RuntimeError("Cycles wrote no image")
+        channels, attributes = read_exr_parts(files[0])
+        wanted = ("Combined", "Debug Sample Count") if counted else ("Combined",)
+        passes = passes_from_channels(channels, self.layer.name, wanted)
+        pixels = passes["Combined"]
+        if pixels.shape[:2] != shape:
+            raise RuntimeError(f"Cycles rendered {pixels.shape[1]}x{pixels.shape[0]} pixels "
+                               f"for a {shape[1]}x{shape[0]} window {window}")
+        reported = attributes.get(f"cycles.{self.layer.name}.samples")
+        reported = None if reported is None else int(reported)
+        if reported is not None and reported != samples:
+            raise RuntimeError(f"Cycles rendered with {reported} samples where {samples} were set")
+        if counted:
+            rendered = self._status_max or samples
+            # The pass holds each pixel's samples divided by the samples the render completed.
+            per_pixel = np.rint(passes["Debug Sample Count"][:, :, 0] * rendered).astype(np.float32)
+            return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds)
+        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds)

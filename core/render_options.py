@@ -1,0 +1,120 @@
+"""The knobs of a selective render, checked before any scene is opened.
+
+Section 5 of the paper: the maximum number of rays per pixel is a user parameter and the
+director map weights it per pixel. Cycles takes one sample count per render, so the frame is
+cut into tiles (``core.tile_plan``); these options say how.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from .errors import InputError
+
+#: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
+#: reset, image write) outweighs the samples saved.
+MIN_TILE_SIZE = 8
+#: Blender 5's volume scattering probability guiding denoises its guide buffers with an
+#: 11-tap Gaussian (radius 5 px) in two passes; a margin of twice that radius makes a tile
+#: bit-identical to the same pixels of a full-frame render (see tests/test_selective_render.py).
+EXACT_MARGIN = 10
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """How a selective render spends its samples.
+
+    Parameters
+    ----------
+    max_spp
+        The ceiling: samples per pixel where the director map is 1 (the gold standard's count).
+    min_spp
+        The floor: every pixel gets at least this many samples (a pixel with none is black).
+    tile_size
+        Edge of the square tiles the plan starts from, in pixels (split down to 8 where it pays).
+    tile_quantile
+        Which quantile of a tile's per-pixel targets the tile renders with; 1.0 (the maximum)
+        means no pixel ever gets fewer samples than the map asks for.
+    spp_levels
+        0 keeps every integer sample count. N >= 2 rounds each tile's count *up* to one of N
+        geometrically spaced levels between min_spp and max_spp, so more neighbours share a
+        count and merge into fewer, larger renders (at the price of extra samples).
+    seed
+        Cycles' seed for every render, so a rectangle always renders to the same pixels.
+    margin
+        Extra pixels rendered around each rectangle and cropped away. Cycles' pixel filter
+        is importance-sampled (a pixel only sees its own samples), so 0 is seamless; see
+        ``EXACT_MARGIN`` for bit-identity with a full-frame render.
+    render_cost
+        The fixed cost of one Cycles render (scene update, session reset, image write) in
+        pixel-samples: a tile is split into quadrants where that saves more samples than the
+        extra renders cost. About 4 ms per render against 2-6 us per pixel-sample of fog on
+        two CPU cores (bench/bench_selective.py); a huge value keeps whole tiles.
+    adaptive_threshold
+        None: every rectangle renders exactly its samples. A number: Cycles' adaptive sampling
+        inside each rectangle, its samples as the ceiling and noise threshold
+        ``adaptive_threshold / sqrt(spp / max_spp)`` (looser where the map is low, in step with
+        the noise the plain plan would leave there).
+    resolution
+        (width, height) to render at instead of the scene's own (percentage taken as 100).
+    """
+
+    max_spp: int
+    min_spp: int = 1
+    tile_size: int = 32
+    tile_quantile: float = 1.0
+    spp_levels: int = 0
+    seed: int = 0
+    margin: int = 0
+    render_cost: int = 1024
+    adaptive_threshold: float | None = None
+    resolution: tuple[int, int] | None = None
+
+    def check(self) -> "RenderOptions":
+        """Raise InputError naming the first impossible option; return self."""
+        if self.max_spp < 1:
+            raise InputError(f"--max-spp must be at least 1 (got {self.max_spp})")
+        if self.min_spp < 1:
+            raise InputError(f"--min-spp must be at least 1 (got {self.min_spp})")
+        if self.min_spp > self.max_spp:
+            raise InputError(f"--min-spp {self.min_spp} is larger than --max-spp {self.max_spp}")
+        if self.tile_size < MIN_TILE_SIZE:
+            raise InputError(f"--tile-size must be at least {MIN_TILE_SIZE} pixels (got {self.tile_size})")
+        if not 0.0 < self.tile_quantile <= 1.0:
+            raise InputError(f"--tile-quantile must be in (0, 1] (got {self.tile_quantile})")
+        if self.spp_levels == 1 or self.spp_levels < 0:
+            raise InputError(f"--spp-levels must be 0 (off) or at least 2 (got {self.spp_levels})")
+        if self.seed < 0:
+            raise InputError(f"--seed must not be negative (got {self.seed})")
+        if not 0 <= self.margin <= 64:
+            raise InputError(f"--margin must be between 0 and 64 pixels (got {self.margin})")
+        if self.render_cost < 0:
+            raise InputError(f"--render-cost must not be negative (got {self.render_cost})")
+        if self.adaptive_threshold is not None and not self.adaptive_threshold > 0.0:
+            raise InputError(f"--adaptive-threshold must be positive (got {self.adaptive_threshold})")
+        if self.resolution is not None:
+            width, height = self.resolution
+            if width < 1 or height < 1:
+                raise InputError(f"--resolution must be positive (got {width}x{height})")
+        return self
+
+    def check_frame(self, width: int, height: int) -> None:
+        """Raise InputError when the tiles do not fit the frame they are cut from."""
+        if self.tile_size > max(width, height):
+            raise InputError(f"--tile-size {self.tile_size} is larger than the {width}x{height} frame")
+
+    def to_dict(self) -> dict:
+        data = asdict(self)
+        data["resolution"] = list(self.resolution) if self.resolution else None
+        return data
+
+
+def parse_resolution(text: str) -> tuple[int, int]:
+    """'512x288' -> (512, 288); InputError for anything else."""
+    parts = text.lower().split("x")
+    try:
+        width, height = (int(p) for p in parts)
+    except ValueError:
+        raise InputError(f"--resolution must look like 512x288 (got '{text}')") from None
+    if width < 1 or height < 1:
+        raise InputError(f"--resolution must be positive (got '{text}')")
+    return width, height

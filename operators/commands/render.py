@@ -1,0 +1,200 @@
+"""``xsl-render render SCENE.blend --mode gold|xs|xsl|uniform|adaptive --max-spp N --out FILE.exr``.
+
+Writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel; the PNG's
+grey level is spp / max_spp) and, with --stats, the run's statistics as JSON.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from ...core.errors import InputError
+
+NAME = "render"
+HELP = "render the scene selectively (xs, xsl) or as a baseline (gold, uniform, adaptive)"
+MODES = ("gold", "xs", "xsl", "uniform", "adaptive")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    parser.add_argument("--mode", required=True, choices=MODES,
+                        help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
+                             "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
+                             "adaptive sampling at equal time")
+    parser.add_argument("--max-spp", type=int, required=True, help="samples per pixel where the map is 1")
+    parser.add_argument("--out", required=True, metavar="FILE.exr", help="the rendered image")
+    parser.add_argument("--stats", metavar="FILE.json", help="write the run's statistics here")
+    parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
+    parser.add_argument("--resolution", metavar="WxH", help="render size (default: the scene's)")
+    maps = parser.add_argument_group("director map (xs, xsl)")
+    maps.add_argument("--map", metavar="FILE.exr", help="the director map, values in [0, 1] at render size")
+    maps.add_argument("--maps", metavar="DIR", help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
+    tiles = parser.add_argument_group("tiles (xs, xsl)")
+    tiles.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
+    tiles.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
+    tiles.add_argument("--tile-quantile", type=float, default=1.0,
+                       help="quantile of a tile's per-pixel targets it renders with (default 1 = max)")
+    tiles.add_argument("--spp-levels", type=int, default=0,
+                       help="round tile samples up to N geometric levels (default 0 = off)")
+    tiles.add_argument("--margin", type=int, default=0,
+                       help="pixels rendered around each rectangle and cropped (default 0; "
+                            "10 = bit-identical to a full-frame render)")
+    tiles.add_argument("--render-cost", type=int, default=1024,
+                       help="fixed cost of one render in pixel-samples; tiles split down to 8 px "
+                            "where that saves more (default 1024)")
+    tiles.add_argument("--adaptive-threshold", type=float,
+                       help="Cycles adaptive sampling inside each rectangle, noise threshold "
+                            "T / sqrt(spp / max-spp) (default: off)")
+    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    budget = parser.add_argument_group("budget (uniform, adaptive)")
+    budget.add_argument("--spp", type=int, help="uniform: samples per pixel")
+    budget.add_argument("--budget-from", metavar="STATS.json",
+                        help="stats of a selective run: uniform takes its mean samples, "
+                             "adaptive its wall time")
+    budget.add_argument("--equal-time", nargs="?", type=float, const=-1.0, metavar="SECONDS",
+                        help="uniform: render for this wall time instead (without SECONDS: the "
+                             "wall time in --budget-from)")
+    budget.add_argument("--noise-threshold", type=float, default=None,
+                        help="adaptive: Cycles' noise threshold (default Cycles' own, 0.01)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _options(args):
+    from ...core.render_options import RenderOptions, parse_resolution
+
+    return RenderOptions(
+        max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
+        resolution=parse_resolution(args.resolution) if args.resolution else None).check()
+
+
+def _read_budget(path: str) -> dict:
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"no such stats file: {path}") from None
+    except (OSError, ValueError) as error:
+        raise InputError(f"cannot read stats file {path}: {str(error).splitlines()[0]}") from None
+    if not isinstance(data, dict) or not {"mean_spp", "wall_s"} <= data.keys():
+        raise InputError(f"{path} is not the --stats JSON of an xsl-render render run")
+    return data
+
+
+def _budget(args) -> dict:
+    """Check the mode's inputs before the scene is opened; return what the mode needs."""
+    stats = _read_budget(args.budget_from) if args.budget_from else None
+    if args.mode in ("xs", "xsl"):
+        if args.map:
+            return {"map": Path(args.map)}
+        if args.maps:
+            return {"map": Path(args.maps) / f"{args.mode}.exr"}
+        raise InputError(f"--mode {args.mode} needs the director map: --map FILE.exr or --maps DIR")
+    if args.mode == "uniform":
+        if args.equal_time is not None:
+            if args.equal_time < 0:
+                if stats is None:
+                    raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
+                return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+            if args.equal_time <= 0:
+                raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
+            return {"seconds": args.equal_time}
+        if args.spp is not None:
+            return {"spp": args.spp}
+        if stats is not None:
+            return {"spp": max(1, int(round(float(stats["mean_spp"])))), "from": args.budget_from,
+                    "budget_mean_spp": float(stats["mean_spp"])}
+        raise InputError("--mode uniform needs --spp N, --budget-from STATS.json or --equal-time SECONDS")
+    if args.mode == "adaptive":
+        if args.equal_time is not None and args.equal_time > 0:
+            return {"seconds": args.equal_time}
+        if stats is not None:
+            return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+        raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
+    return {}
+
+
+def _read_map(path: Path):
+    from ...core.imageio import read_image
+
+    from ...core.tile_plan import check_director_map
+
+    if not path.exists():
+        raise InputError(f"no such director map: {path}")
+    image = read_image(path)
+    # Channels, NaN and range now, before the scene is opened; the size once it is.
+    return check_director_map(image, image.shape[1], image.shape[0])
+
+
+def run(args) -> int:
+    options = _options(args)
+    out = Path(args.out)
+    if out.suffix.lower() != ".exr":
+        raise InputError(f"--out must name an .exr file (got {out})")
+    budget = _budget(args)
+    started = time.perf_counter()
+    director_map = _read_map(budget["map"]) if "map" in budget else None
+    map_seconds = time.perf_counter() - started
+
+    from ...addon import selective_render as sr
+    from ...addon.blend_session import open_blend
+    from ..interrupt import InterruptToCancel
+    from ..progress_bar import ProgressBar
+
+    scene = open_blend(args.scene, args.scene_name)
+    bar = None if args.quiet else ProgressBar(args.mode)
+    try:
+        with InterruptToCancel() as interrupt:
+            progress = interrupt.wrap(bar)
+            if args.mode == "gold":
+                outcome = sr.render_gold(scene, options, progress=progress)
+            elif args.mode in ("xs", "xsl"):
+                outcome = sr.render_selective(scene, director_map, options, progress=progress,
+                                              mode=args.mode, map_seconds=map_seconds)
+            elif args.mode == "uniform":
+                outcome = sr.render_uniform(scene, options, spp=budget.get("spp"),
+                                            seconds=budget.get("seconds"), progress=progress)
+            else:
+                threshold = args.noise_threshold if args.noise_threshold is not None \
+                    else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
+                outcome = sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    for warning in outcome.warnings:
+        print(f"xsl-render: warning: {warning}", file=sys.stderr)
+    stats = outcome.stats
+    stats.update(file=str(args.scene), out=str(out))
+    if "from" in budget:
+        stats["budget_from"] = budget["from"]
+    if "budget_mean_spp" in budget:
+        stats["budget_mean_spp"] = budget["budget_mean_spp"]
+    _write_outputs(out, outcome, options, args.stats)
+    print(f"{args.mode}: {stats['resolution'][0]}x{stats['resolution'][1]}, mean "
+          f"{stats['mean_spp']:.2f} spp in {stats['renders']} render(s), {stats['wall_s']:.2f} s -> {out}")
+    return 0
+
+
+def spp_paths(out: Path) -> tuple[Path, Path]:
+    """FILE.exr -> (FILE_spp.exr, FILE_spp.png)."""
+    return out.with_name(out.stem + "_spp.exr"), out.with_name(out.stem + "_spp.png")
+
+
+def _write_outputs(out: Path, outcome, options, stats_path: str | None) -> None:
+    from ...core.files import write_json
+    from ...core.imageio import write_exr, write_png
+
+    started = time.perf_counter()
+    stats = outcome.stats
+    attributes = {"xsl_render:mode": stats["mode"], "xsl_render:max_spp": options.max_spp,
+                  "xsl_render:seed": options.seed, "xsl_render:mean_spp": float(stats["mean_spp"])}
+    spp_exr, spp_png = spp_paths(out)
+    write_exr(out, outcome.image, ["R", "G", "B", "A"], attributes=attributes)
+    write_exr(spp_exr, outcome.samples, ["Y"], attributes=attributes)
+    write_png(spp_png, outcome.samples / float(options.max_spp))
+    stats["phases_s"]["write"] = time.perf_counter() - started
+    stats["wall_s"] = sum(stats["phases_s"].values())
+    if stats_path:
+        write_json(stats_path, stats)
