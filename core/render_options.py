@@ -110,11 +110,11 @@ class RenderOptions:
 
 def parse_resolution(text: str) -> tuple[int, int]:
     """'512x288' -> (512, 288); InputError for anything else."""
-    parts = text.lower().split("x")
+    parts = text.strip().lower().split("x")
     try:
         width, height = (int(p) for p in parts)
     except ValueError:
         raise InputError(f"--resolution must look like 512x288 (got '{text}')") from None
-    if width < 1 or height < 1:
-        raise InputError(f"--resolution must be positive (got '{text}')")
+    if not (1 <= width <= 65536 and 1 <= height <= 65536):
+        raise InputError(f"--resolution {width}x{height} is out of range")
     return width, height

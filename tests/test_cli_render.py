@@ -87,7 +87,7 @@ def nan_map(path):
     (["--mode", "gold", "--max-spp", "0"], "--max-spp must be at least 1"),
     (["--mode", "xsl", "--max-spp", "4", "--min-spp", "5", "--map", "m.exr"], "larger than --max-spp"),
     (["--mode", "xsl", "--max-spp", "4", "--tile-size", "4", "--map", "m.exr"], "--tile-size must be at least 8"),
-    (["--mode", "xsl", "--max-spp", "4"], "needs the director map"),
+    (["--mode", "xsl", "--max-spp", "4", "--wl", "-1"], "--wl must be a number >= 0"),
     (["--mode", "xsl", "--max-spp", "4", "--map", "missing.exr"], "no such director map"),
     (["--mode", "xsl", "--max-spp", "4", "--map", "nan.exr"], "NaN"),
     (["--mode", "uniform", "--max-spp", "4"], "needs --spp N"),

@@ -78,3 +78,18 @@ def test_bad_options_name_the_option(cli, fog_scene, tmp_path, option, value, na
     line = one_line_error(cli("maps", fog_scene, "--out", tmp_path / "maps", option, value))
     assert named in line
     assert not (tmp_path / "maps" / "xsl.exr").exists()
+
+
+def test_render_computes_the_maps_on_the_fly(cli, fog_scene, tmp_path):
+    out = tmp_path / "xsl.exr"
+    result = cli("render", fog_scene, "--mode", "xsl", "--max-spp", "8", "--out", out,
+                 "--resolution", "64x36", "--stats", tmp_path / "stats.json",
+                 "--save-maps", tmp_path / "maps", "--quiet")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["phases_s"]["maps"] > 0
+    xsl = read(tmp_path / "maps", "xsl")
+    assert stats["director_map_mean"] == pytest.approx(float(xsl.mean()), rel=1e-5)
+    samples = read_image(tmp_path / "xsl_spp.exr")[..., 0]
+    # Tiles render with the largest target of their pixels: nothing gets less than asked.
+    assert (samples >= np.maximum(1, np.round(8 * xsl)) - 1e-6).all()

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import warnings
 from contextlib import contextmanager
@@ -19,15 +18,10 @@ def add_scene_arguments(parser) -> None:
 
 
 def parse_resolution(text: str | None) -> tuple[int, int] | None:
-    if text is None:
-        return None
-    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
-    if not match:
-        raise InputError(f"--resolution must look like 512x288, got '{text}'")
-    width, height = int(match.group(1)), int(match.group(2))
-    if width < 1 or height < 1 or width > 65536 or height > 65536:
-        raise InputError(f"--resolution {width}x{height} is out of range")
-    return width, height
+    """'512x288' -> (512, 288); None stays None (the scene's own resolution)."""
+    from ...core.render_options import parse_resolution as parse
+
+    return None if text is None else parse(text)
 
 
 def _auto_or(kind):

@@ -11,6 +11,8 @@ import time
 from pathlib import Path
 
 from ...core.errors import InputError
+from .common import (add_map_arguments, add_scene_arguments, map_options_from_args,
+                     parse_resolution, warnings_as_lines)
 
 NAME = "render"
 HELP = "render the scene selectively (xs, xsl) or as a baseline (gold, uniform, adaptive)"
@@ -18,7 +20,7 @@ MODES = ("gold", "xs", "xsl", "uniform", "adaptive")
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    add_scene_arguments(parser)
     parser.add_argument("--mode", required=True, choices=MODES,
                         help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
                              "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
@@ -26,11 +28,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-spp", type=int, required=True, help="samples per pixel where the map is 1")
     parser.add_argument("--out", required=True, metavar="FILE.exr", help="the rendered image")
     parser.add_argument("--stats", metavar="FILE.json", help="write the run's statistics here")
-    parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
-    parser.add_argument("--resolution", metavar="WxH", help="render size (default: the scene's)")
-    maps = parser.add_argument_group("director map (xs, xsl)")
+    maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
     maps.add_argument("--map", metavar="FILE.exr", help="the director map, values in [0, 1] at render size")
     maps.add_argument("--maps", metavar="DIR", help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
+    maps.add_argument("--save-maps", metavar="DIR", help="also write the maps computed on the fly here")
+    add_map_arguments(parser)
     tiles = parser.add_argument_group("tiles (xs, xsl)")
     tiles.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
     tiles.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
@@ -62,13 +64,13 @@ def add_arguments(parser) -> None:
 
 
 def _options(args):
-    from ...core.render_options import RenderOptions, parse_resolution
+    from ...core.render_options import RenderOptions
 
     return RenderOptions(
         max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=parse_resolution(args.resolution) if args.resolution else None).check()
+        resolution=parse_resolution(args.resolution)).check()
 
 
 def _read_budget(path: str) -> dict:
@@ -91,7 +93,7 @@ def _budget(args) -> dict:
             return {"map": Path(args.map)}
         if args.maps:
             return {"map": Path(args.maps) / f"{args.mode}.exr"}
-        raise InputError(f"--mode {args.mode} needs the director map: --map FILE.exr or --maps DIR")
+        return {"compute_maps": map_options_from_args(args)}
     if args.mode == "uniform":
         if args.equal_time is not None:
             if args.equal_time < 0:
@@ -128,6 +130,20 @@ def _read_map(path: Path):
     return check_director_map(image, image.shape[1], image.shape[0])
 
 
+def _compute_map(scene, args, map_options, options):
+    """The XS or XSL map of the scene at the render size, as ``xsl-render maps`` makes it."""
+    from ...addon.director_maps import MapWarning, compute_maps
+    from ...core.map_files import write_map_set
+    from ...core.xmap import XMapWarning
+
+    started = time.perf_counter()
+    with warnings_as_lines(MapWarning, XMapWarning):
+        maps = compute_maps(scene, map_options, size=options.resolution)
+    if args.save_maps:
+        write_map_set(args.save_maps, maps)
+    return maps.director(args.mode), time.perf_counter() - started
+
+
 def run(args) -> int:
     options = _options(args)
     out = Path(args.out)
@@ -144,10 +160,14 @@ def run(args) -> int:
     from ..progress_bar import ProgressBar
 
     scene = open_blend(args.scene, args.scene_name)
+    if args.frame is not None:
+        scene.frame_set(args.frame)        # the opened copy only; the file is never written
     bar = None if args.quiet else ProgressBar(args.mode)
     try:
         with InterruptToCancel() as interrupt:
             progress = interrupt.wrap(bar)
+            if "compute_maps" in budget:
+                director_map, map_seconds = _compute_map(scene, args, budget["compute_maps"], options)
             if args.mode == "gold":
                 outcome = sr.render_gold(scene, options, progress=progress)
             elif args.mode in ("xs", "xsl"):
