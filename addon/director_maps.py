@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.camera import CameraModel
 from ..core.director import xs_map, xsl_map
-from ..core.light_map import auto_parameters, multi_gaussian, normalise_glow
+from ..core.light_map import auto_parameters, kernel_mass, multi_gaussian, normalise_glow
 from ..core.light_raster import zero_light_map
 from ..core.map_files import MapSet
 from ..core.map_options import MapOptions
@@ -167,8 +167,11 @@ def light_map(camera: CameraModel, lights, xres: XMapResult, emission: np.ndarra
     total = np.zeros((camera.height, camera.width))
     l0_total = np.zeros_like(total)
     for (n, sigma_base), l0 in groups.items():
-        total += multi_gaussian(l0, n, sigma_base)
-        l0_total += l0
+        # Eq. 6 multiplies a light's mass by 2^n; lights spread with different n (auto mode)
+        # must keep the share of light their L_0 gives them, so each group is divided by it.
+        mass = kernel_mass(n) if len(groups) > 1 else 1.0
+        total += multi_gaussian(l0, n, sigma_base) / mass
+        l0_total += l0 / mass
     info = {
         "drawn": [d.__dict__ for d in drawn if d.drawn] + (
             [{"name": "emissive surfaces", "kind": "MESH", "pixels": int((l0_meshes > 0).sum())}]

@@ -71,6 +71,11 @@ def multi_gaussian(zero_light_map: np.ndarray, n: int, sigma_base: float,
     return gaussian_mixture_blur(image, sigmas * scale, counts)
 
 
+def kernel_mass(n: int) -> float:
+    """Integral of prod_{i=1..n} (delta + G_i): each factor has mass 2."""
+    return 2.0 ** n
+
+
 def multi_gaussian_direct(zero_light_map: np.ndarray, n: int, sigma_base: float,
                           scale: float = 1.0, margin: int | None = None) -> np.ndarray:
     """Eq. 6 iterated literally, with scipy's Gaussian filter on a zero-padded canvas.
@@ -111,9 +116,10 @@ def auto_parameters(optical_depth: float) -> tuple[int, float]:
     """(n, sigma_base) from the optical depth tau between the camera and a light.
 
     The paper: n 4-8 and sigma_base up to 4 for thin media, up to n = 20 and sigma_base = 10
-    for thick ones. We map the fraction of light the medium takes away on the way,
-    1 - exp(-tau), linearly onto those ranges: tau -> 0 gives (4, 1), a light barely
-    seen through the fog (tau >= 3) gives nearly (20, 10).
+    for thick ones, and (8, 4) for the "thin" foggy road of its Fig. 5c. We map
+    1 - exp(-tau / 2) linearly onto those ranges: tau -> 0 gives (4, 1); the road's
+    headlights (tau about 0.8) get about (9, 4); a lamp barely seen through the fog
+    (tau >= 6) nearly (20, 10).
     """
-    thickness = 1.0 - float(np.exp(-max(float(optical_depth), 0.0)))
+    thickness = 1.0 - float(np.exp(-0.5 * max(float(optical_depth), 0.0)))
     return int(round(4 + 16 * thickness)), round(1.0 + 9.0 * thickness, 1)
