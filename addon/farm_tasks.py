@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.errors import InputError
-from ..core.farm_files import (FrameFiles, load_plan, maps_inputs, scene_sha256, valid_plan,
-                               valid_tile, write_plan_record, write_tile)
+from ..core.farm_files import (FrameFiles, load_plan, maps_inputs, renderer_version, scene_sha256,
+                               valid_plan, valid_tile, write_plan_record, write_tile)
 from ..core.map_files import write_map_set
 from ..core.map_options import MapOptions
 from ..core.render_options import RenderOptions
@@ -77,6 +77,9 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
     if scene_sha256(scene_path) != record.scene_digest:
         raise InputError(f"{scene_path} changed after the maps of frame {frame} were computed; "
                          "rerun the maps step")
+    if renderer_version() != record.blender:
+        raise InputError(f"frame {frame} was planned with Blender {record.blender} but this machine "
+                         f"renders with {renderer_version()}; one job needs one Blender release")
     options = record.options
     mine = plan_group(record.plan.rects, group, groups, options.render_cost)
     outcome = TaskOutcome(len(mine))

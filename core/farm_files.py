@@ -178,6 +178,11 @@ class PlanRecord:
     def mode(self) -> str:
         return self.data["inputs_detail"]["mode"]
 
+    @property
+    def blender(self) -> str:
+        """The Blender release the frame was planned with; its rectangles render with it too."""
+        return self.data["inputs_detail"]["blender"]
+
 
 def options_from_dict(data: dict) -> RenderOptions:
     """``RenderOptions.to_dict()`` read back."""
@@ -241,7 +246,7 @@ def tile_inputs(record: PlanRecord, rect: Rect) -> dict:
     return {"scene_sha256": record.scene_digest, "scene_name": record.scene_name,
             "frame": record.data["frame"], "resolution": [width, height], "rect": rect.to_dict(),
             "window": list(render_window(rect.window, options.margin, width, height)),
-            "seed": options.seed, "adaptive_threshold": threshold, "blender": renderer_version()}
+            "seed": options.seed, "adaptive_threshold": threshold, "blender": record.blender}
 
 
 def valid_tile(files: FrameFiles, record: PlanRecord, rect: Rect) -> dict | None:

@@ -3,6 +3,7 @@
 that is not ours."""
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import signal
@@ -14,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from fog_scene import build_fog_scene
+from conftest import EXAMPLES
 from test_cli_info import one_line_error
 
 from xsl_render.core.farm_files import FrameFiles, read_record, valid_plan, valid_tile
@@ -24,18 +25,11 @@ from xsl_render.core.task_groups import plan_group
 
 pytestmark = pytest.mark.blender
 
+ROAD = EXAMPLES / "road.blend"
 W, H = 96, 54
 # High enough a ceiling that a tile task takes a few tenths of a second: time to kill it.
-OPTIONS = ["--max-spp", "128", "--tile-size", "16", "--seed", "3", "--resolution", f"{W}x{H}"]
+OPTIONS = ["--max-spp", "64", "--tile-size", "16", "--seed", "3", "--resolution", f"{W}x{H}"]
 OPENJD = Path(sys.executable).with_name("openjd")
-
-
-@pytest.fixture
-def fog_blend(blender, tmp_path):
-    build_fog_scene(blender, W, H)
-    path = tmp_path / "fog.blend"
-    blender.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
 
 
 def openjd(*args, timeout: float = 300) -> subprocess.CompletedProcess:
@@ -72,11 +66,12 @@ def kill_first_task_of_group(process: subprocess.Popen, files: FrameFiles, group
 
 
 @pytest.mark.render
-def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(cli, fog_blend, tmp_path):
+def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(cli, tmp_path):
+    scene_digest = hashlib.sha256(ROAD.read_bytes()).hexdigest()
     bundle = tmp_path / "bundle"
-    result = cli("farm", fog_blend, "--bundle", bundle, "--frames", "1", "--tasks-per-frame", "2", *OPTIONS)
+    result = cli("farm", ROAD, "--bundle", bundle, "--frames", "1", "--tasks-per-frame", "2", *OPTIONS)
     assert result.returncode == 0, result.stderr
-    assert f"openjd run {bundle}/template.yaml -p SceneFile={fog_blend}" in result.stdout
+    assert f"openjd run {bundle}/template.yaml -p SceneFile={ROAD}" in result.stdout
     check = openjd("check", bundle / "template.yaml")
     assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
 
@@ -116,7 +111,7 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
 
     # The same image as one `xsl-render render` process with the same options and seed.
     reference = tmp_path / "render" / "xsl.exr"
-    result = cli("render", fog_blend, "--mode", "xsl", "--frame", "1", "--out", reference, "--quiet", *OPTIONS)
+    result = cli("render", ROAD, "--mode", "xsl", "--frame", "1", "--out", reference, "--quiet", *OPTIONS)
     assert result.returncode == 0, result.stderr
     np.testing.assert_array_equal(read_image(files.image), read_image(reference))
     np.testing.assert_array_equal(read_image(files.spp_image), read_image(reference.with_name("xsl_spp.exr")))
@@ -126,32 +121,34 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
     # A damaged rectangle is rendered again (to the same pixels), and nothing else.
     damaged = groups[0][0]
     files.tile_image(damaged).write_bytes(files.tile_image(damaged).read_bytes()[:-64])
-    result = cli("farm-task", "tiles", fog_blend, "--frame", "1", "--output", files.output,
+    result = cli("farm-task", "tiles", ROAD, "--frame", "1", "--output", files.output,
                  "--group", "1", "--groups", "2")
     assert result.returncode == 0, result.stderr
     assert f"{len(groups[0])} rectangles, 1 rendered now" in result.stdout
     result = cli("farm-task", "composite", "--frame", "1", "--output", files.output)
     assert result.returncode == 0 and "already done" in result.stdout, result.stdout + result.stderr
+    assert hashlib.sha256(ROAD.read_bytes()).hexdigest() == scene_digest     # never written
 
 
-def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, fog_blend, tmp_path):
+def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, tmp_path):
     foreign = tmp_path / "thesis"
     foreign.mkdir()
     (foreign / "chapter1.tex").write_text("precious")
-    result = cli("farm", fog_blend, "--bundle", foreign)
+    result = cli("farm", ROAD, "--bundle", foreign)
     assert result.returncode == 2
     assert "is not an xsl-render job bundle" in one_line_error(result)
     assert [p.name for p in foreign.iterdir()] == ["chapter1.tex"]
 
     ours = tmp_path / "bundle"
     for frames, tasks in (("1-3", "2"), ("2-4:2", "5")):
-        result = cli("farm", fog_blend, "--bundle", ours, "--frames", frames, "--tasks-per-frame", tasks,
+        result = cli("farm", ROAD, "--bundle", ours, "--frames", frames, "--tasks-per-frame", tasks,
                      "--mode", "xs", "--wl", "0.8", "--adaptive-threshold", "0.05")
         assert result.returncode == 0, result.stderr
     values = openjd_values(yaml.safe_load((ours / "parameter_values.yaml").read_text()))
     assert values["Frames"] == "2-4:2" and values["TasksPerFrame"] == 5 and values["Mode"] == "xs"
-    assert values["MaxSpp"] == 4096 or values["MaxSpp"] >= 1      # the scene's own Cycles samples
-    assert values["Resolution"] == f"{W}x{H}" and values["AdaptiveThreshold"] == "0.05"
+    assert values["MaxSpp"] == 64                     # the scene's own Cycles samples
+    assert values["Resolution"] == "512x288" and values["AdaptiveThreshold"] == "0.05"
+    assert values["SceneFile"] == str(ROAD) and "OutputDir" not in values
     assert Path(values["XslRender"]).name.startswith("xsl-render")
 
 
@@ -162,8 +159,8 @@ def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, fog_blend, 
     (["--tile-size", "4"], "--tile-size"),
     (["--wx", "0", "--ws", "0"], "cannot both be 0"),
 ])
-def test_bad_options_exit_2_before_anything_is_written(cli, fog_blend, tmp_path, args, message):
-    result = cli("farm", fog_blend, "--bundle", tmp_path / "bundle", *args)
+def test_bad_options_exit_2_before_anything_is_written(cli, tmp_path, args, message):
+    result = cli("farm", ROAD, "--bundle", tmp_path / "bundle", *args)
     assert result.returncode == 2
     assert message in one_line_error(result)
     assert not (tmp_path / "bundle").exists()

@@ -63,10 +63,20 @@ def _output(args, bundle: Path) -> str:
         return str(output)
 
 
+def tile_options(args, max_spp: int, resolution):
+    """``RenderOptions`` of the tile options with ``max_spp`` (the scene's samples unless given)."""
+    from ...core.render_options import RenderOptions
+
+    return RenderOptions(
+        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
+        resolution=resolution).check()
+
+
 def run(args) -> int:
     from ...core.job_bundle import check_bundle_folder, write_bundle
     from ...core.job_template import FarmJob, job_template, parameter_values, parse_frames
-    from ...core.render_options import RenderOptions
     from ...core.task_groups import check_groups
 
     # Everything that needs no scene first: a bad option fails before Blender loads.
@@ -76,6 +86,7 @@ def run(args) -> int:
     check_groups(args.tasks_per_frame)
     if args.max_spp is not None and args.max_spp < 1:
         raise InputError(f"--max-spp must be at least 1 (got {args.max_spp})")
+    tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
 
     from ...addon.blend_session import open_blend
@@ -87,11 +98,7 @@ def run(args) -> int:
     if frames is None:
         frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
     max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
-    options = RenderOptions(
-        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
-        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
-        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=resolution or render_size(scene)).check()
+    options = tile_options(args, max_spp, resolution or render_size(scene))
     job = FarmJob(scene=scene_path, scene_name=scene.name, frames=frames,
                   output=_output(args, bundle), mode=args.mode, map_options=map_options,
                   options=options, tasks_per_frame=args.tasks_per_frame,
