@@ -32,8 +32,17 @@ OPTIONS = ["--max-spp", "64", "--tile-size", "16", "--seed", "3", "--resolution"
 OPENJD = Path(sys.executable).with_name("openjd")
 
 
-def openjd(*args, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([str(OPENJD), *map(str, args)], capture_output=True, text=True, timeout=timeout)
+def openjd(*args, env: dict | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run([str(OPENJD), *map(str, args)], capture_output=True, text=True,
+                          env=env, timeout=timeout)
+
+
+def private_tmp(tmp_path: Path) -> dict:
+    """An environment whose temporary folder is the test's own: a killed task's leftovers
+    (its Cycles scratch folder, the openjd session folder) go with the test's files."""
+    folder = tmp_path / "tmp"
+    folder.mkdir(exist_ok=True)
+    return {**os.environ, "TMPDIR": str(folder)}
 
 
 def job_values(bundle: Path) -> str:
@@ -80,7 +89,7 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
     log_path = tmp_path / "killed.log"
     with open(log_path, "w") as log:
         process = subprocess.Popen([str(OPENJD), "run", str(bundle / "template.yaml"), "-p", job_values(bundle)],
-                                   stdout=log, stderr=subprocess.STDOUT)
+                                   stdout=log, stderr=subprocess.STDOUT, env=private_tmp(tmp_path))
         try:
             kill_first_task_of_group(process, files, group=2)
             assert process.wait(timeout=120) != 0           # the job failed with its task
@@ -97,7 +106,7 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
     before = render_ids(files)
 
     # Rerun the job: only the rectangles task 2 never finished are rendered.
-    rerun = openjd("run", bundle / "template.yaml", "-p", job_values(bundle))
+    rerun = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
     assert rerun.returncode == 0, rerun.stdout[-3000:]
     out = rerun.stdout
     missing = len(groups[1]) - len(finished[1])
