@@ -75,8 +75,8 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
     check_blend_file(scene_path)
     record = load_plan(files)
     if scene_sha256(scene_path) != record.scene_digest:
-        raise InputError(f"{scene_path} changed after the maps of frame {frame} were computed; "
-                         "rerun the maps step")
+        raise InputError(f"{scene_path} is not the scene the maps of frame {frame} were computed "
+                         "from (it changed, or is another file); rerun the maps step")
     if renderer_version() != record.blender:
         raise InputError(f"frame {frame} was planned with Blender {record.blender} but this machine "
                          f"renders with {renderer_version()}; one job needs one Blender release")

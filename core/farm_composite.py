@@ -97,5 +97,8 @@ def composite_frame(files: FrameFiles, groups: int | None = None) -> CompositeRe
     stats["image_sha256"] = file_sha256(files.image)
     stats["spp_sha256"] = file_sha256(files.spp_image)
     stats["phases_s"]["composite"] = time.perf_counter() - started
+    # The compute the frame cost across its tasks (what --budget-from compares against),
+    # not the elapsed time of the job, which depends on how many machines ran it.
+    stats["wall_s"] = sum(stats["phases_s"].values())
     write_json(files.stats, stats)
     return CompositeResult(stats, skipped=False)

@@ -247,6 +247,7 @@ def test_composite_assembles_checks_and_skips_when_current(tmp_path):
     stats = json.loads(files.stats.read_text())
     assert stats["total_samples"] == record.plan.total_samples and stats["renders"] == len(rects)
     assert stats["grouping"]["groups"] == 2 and stats["phases_s"]["maps"] == 0.5
+    assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
     assert composite_frame(files, groups=2).skipped
     fake_render(files, record, rects[0], 9.0)                              # a rectangle changed
     result = composite_frame(files)
