@@ -18,7 +18,6 @@ the statistics of the run (the ``--stats`` JSON).
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -28,10 +27,10 @@ from ..core.composite import Compositor, crop, render_window
 from ..core.errors import InputError
 from ..core.progress import Progress, ProgressCallback, TileProgress
 from ..core.render_options import RenderOptions
-from ..core.tile_plan import check_director_map, make_plan
+from ..core.tile_plan import Rect, check_director_map, make_plan
 from .scene_probe import camera_model, render_size
 from .scene_state import preserved_scene
-from .tile_render import CyclesWindowRenderer
+from .tile_render import CyclesWindowRenderer, RenderedWindow
 
 #: Cycles' own default noise threshold, what an artist switching adaptive sampling on gets.
 CYCLES_DEFAULT_NOISE_THRESHOLD = 0.01
@@ -50,7 +49,7 @@ class RenderOutcome:
     warnings: list[str] = field(default_factory=list)
 
 
-def _prepare(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
+def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     """Apply the resolution option, check the camera, warn about a non-Cycles engine.
 
     Must run inside ``preserved_scene``. Returns (width, height, warnings).
@@ -96,6 +95,31 @@ def _tile_entry(window, rendered) -> dict:
             "mean_spp": float(np.mean(rendered.samples)), "seconds": rendered.seconds}
 
 
+@dataclass
+class RenderedRect:
+    """One rectangle of a plan, rendered and cropped to its own pixels."""
+
+    rect: Rect
+    window: tuple[int, int, int, int]       # what Cycles rendered: the rectangle and its margin
+    pixels: np.ndarray                      # (h, w, 4) float32 RGBA of the rectangle only
+    samples: np.ndarray | int               # samples per pixel: a number, or (h, w) counts
+    rendered: RenderedWindow
+
+
+def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptions) -> RenderedRect:
+    """Render one rectangle of a plan (grown by ``options.margin``) and crop it back.
+
+    The one place a plan's rectangle becomes pixels, for ``render_selective`` and for the
+    farm's tile tasks alike, so both give the same image.
+    """
+    window = render_window(rect.window, options.margin, renderer.width, renderer.height)
+    rendered = renderer.render(window, rect.spp, adaptive_threshold=options.noise_threshold(rect.spp))
+    samples = rendered.samples
+    if isinstance(samples, np.ndarray):
+        samples = crop(samples, window, rect.window)
+    return RenderedRect(rect, window, crop(rendered.pixels, window, rect.window), samples, rendered)
+
+
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
                      progress: ProgressCallback | None = None, mode: str = "xsl",
                      map_seconds: float = 0.0) -> RenderOutcome:
@@ -118,7 +142,7 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
     """
     report = Progress(progress)
     with preserved_scene(scene):
-        width, height, warnings = _prepare(scene, options)
+        width, height, warnings = prepare_render(scene, options)
         started = time.perf_counter()
         data = check_director_map(director_map, width, height)
         plan = make_plan(data, options)
@@ -130,18 +154,11 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
         with CyclesWindowRenderer(scene, options.seed) as renderer:
             for rect in plan.rects:
                 tracker.start(rect.spp)
-                window = render_window(rect.window, options.margin, width, height)
-                threshold = None
-                if options.adaptive_threshold is not None:
-                    threshold = options.adaptive_threshold / math.sqrt(rect.spp / options.max_spp)
-                rendered = renderer.render(window, rect.spp, adaptive_threshold=threshold)
+                piece = render_rect(renderer, rect, options)
                 placed = time.perf_counter()
-                samples = rendered.samples
-                if isinstance(samples, np.ndarray):
-                    samples = crop(samples, window, rect.window)
-                compositor.add(rect.window, crop(rendered.pixels, window, rect.window), samples)
+                compositor.add(rect.window, piece.pixels, piece.samples)
                 composite_s += time.perf_counter() - placed
-                tiles.append(_tile_entry(rect.window, rendered) | {"window": list(window)})
+                tiles.append(_tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
                 tracker.finish()
         phases["renders"] = time.perf_counter() - started - composite_s
         started = time.perf_counter()
@@ -160,7 +177,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
     """One ordinary Cycles render of the whole frame (optionally time-limited)."""
     report = Progress(progress)
     with preserved_scene(scene):
-        width, height, warnings = _prepare(scene, options)
+        width, height, warnings = prepare_render(scene, options)
         phases = {"maps": 0.0}
         started = time.perf_counter()
         tiles = []

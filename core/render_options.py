@@ -6,6 +6,7 @@ cut into tiles (``core.tile_plan``); these options say how.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 from .errors import InputError
@@ -96,6 +97,14 @@ class RenderOptions:
             if width < 1 or height < 1:
                 raise InputError(f"--resolution must be positive (got {width}x{height})")
         return self
+
+    def noise_threshold(self, spp: int) -> float | None:
+        """Cycles' noise threshold for a rectangle of ``spp`` samples (None without
+        per-rectangle adaptive sampling): ``adaptive_threshold / sqrt(spp / max_spp)``, looser
+        where the map asked for fewer samples."""
+        if self.adaptive_threshold is None:
+            return None
+        return self.adaptive_threshold / math.sqrt(spp / self.max_spp)
 
     def check_frame(self, width: int, height: int) -> None:
         """Raise InputError when the tiles do not fit the frame they are cut from."""
