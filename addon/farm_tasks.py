@@ -105,10 +105,10 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
         if (width, height) != (record.plan.width, record.plan.height):
             raise InputError(f"the plan of frame {frame} is {record.plan.width}x{record.plan.height} "
                              f"but the scene renders {width}x{height}; rerun the maps step")
-        with CyclesWindowRenderer(scene, options.seed) as renderer:
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             for rect in todo:
                 piece = render_rect(renderer, rect, options)
-                write_tile(files, record, rect, piece.pixels, piece.samples, {
+                write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
                     "group": group, "groups": groups, "spp": rect.spp,
                     "samples_rendered": piece.rendered.samples_rendered,
                     "seconds": piece.rendered.seconds, "render_id": uuid.uuid4().hex,

@@ -104,6 +104,7 @@ class RenderedRect:
     pixels: np.ndarray                      # (h, w, 4) float32 RGBA of the rectangle only
     samples: np.ndarray | int               # samples per pixel: a number, or (h, w) counts
     rendered: RenderedWindow
+    guides: np.ndarray | None = None        # (h, w, 6) denoising albedo + normal, cropped
 
 
 def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptions) -> RenderedRect:
@@ -117,7 +118,22 @@ def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptio
     samples = rendered.samples
     if isinstance(samples, np.ndarray):
         samples = crop(samples, window, rect.window)
-    return RenderedRect(rect, window, crop(rendered.pixels, window, rect.window), samples, rendered)
+    guides = None if rendered.guides is None else crop(rendered.guides, window, rect.window)
+    return RenderedRect(rect, window, crop(rendered.pixels, window, rect.window), samples, rendered, guides)
+
+
+def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
+                 phases: dict) -> np.ndarray:
+    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase."""
+    if not options.denoise:
+        return image
+    from .denoise import denoise
+
+    started = time.perf_counter()
+    out = denoise(image, None if guides is None else guides[..., :3],
+                  None if guides is None else guides[..., 3:6])
+    phases["denoise"] = time.perf_counter() - started
+    return out
 
 
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
@@ -149,14 +165,17 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
         phases = {"maps": map_seconds, "plan": time.perf_counter() - started}
         tracker = TileProgress(report, [rect.samples for rect in plan.rects], options.render_cost)
         compositor = Compositor(width, height)
+        guides = Compositor(width, height, channels=6) if options.denoise else None
         tiles, composite_s = [], 0.0
         started = time.perf_counter()
-        with CyclesWindowRenderer(scene, options.seed) as renderer:
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             for rect in plan.rects:
                 tracker.start(rect.spp)
                 piece = render_rect(renderer, rect, options)
                 placed = time.perf_counter()
                 compositor.add(rect.window, piece.pixels, piece.samples)
+                if guides is not None:
+                    guides.add(rect.window, piece.guides, piece.samples)
                 composite_s += time.perf_counter() - placed
                 tiles.append(_tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
                 tracker.finish()
@@ -164,6 +183,7 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
+        image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
         stats = _stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
     stats["plan"] = plan.to_dict()
     stats["ideal_speedup"] = plan.ideal_speedup
@@ -181,7 +201,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         phases = {"maps": 0.0}
         started = time.perf_counter()
         tiles = []
-        with CyclesWindowRenderer(scene, options.seed) as renderer:
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             report.update(0.0, f"{mode}: rendering")
             time_limit = 0.0
             if time_budget is not None:
@@ -200,6 +220,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(_tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
+        image = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = _stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
@@ -210,7 +231,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         stats.update(time_budget_s=time_budget, time_limit_s=time_limit,
                      stopped_by_time=rendered.samples_rendered < samples
                      and rendered.seconds >= 0.9 * time_limit)
-    return RenderOutcome(rendered.pixels, per_pixel, stats, warnings)
+    return RenderOutcome(image, per_pixel, stats, warnings)
 
 
 def render_gold(scene, options: RenderOptions, progress: ProgressCallback | None = None) -> RenderOutcome:

@@ -36,11 +36,13 @@ def _valid_outputs(files: FrameFiles, inputs_digest: str) -> dict | None:
     return stats
 
 
-def composite_frame(files: FrameFiles, groups: int | None = None) -> CompositeResult:
+def composite_frame(files: FrameFiles, groups: int | None = None,
+                    denoiser=None) -> CompositeResult:
     """Assemble ``files.frame`` from its rectangles; InputError naming what is missing.
 
     ``groups`` (the job's tile tasks per frame) only adds how evenly they shared the work
-    to the statistics.
+    to the statistics. ``denoiser(rgba, albedo, normal)`` denoises the frame when the plan's
+    options ask for it (``addon.denoise.denoise``; passed in so this module needs no Blender).
     """
     started = time.perf_counter()
     record = load_plan(files)
@@ -62,10 +64,23 @@ def composite_frame(files: FrameFiles, groups: int | None = None) -> CompositeRe
         return CompositeResult(previous, skipped=True)
 
     compositor = Compositor(plan.width, plan.height)
+    guides = Compositor(plan.width, plan.height, channels=6) if options.denoise else None
     for rect in plan.rects:
-        pixels, samples = read_tile(files, rect)
+        pixels, samples, tile_guides = read_tile(files, rect)
         compositor.add(rect.window, pixels, samples)
+        if guides is not None:
+            if tile_guides is None:
+                raise InputError(f"{files.tile_image(rect)} has no denoising passes; rerun the tile step")
+            guides.add(rect.window, tile_guides, samples)
     image, samples = compositor.result()
+    denoise_seconds = 0.0
+    if guides is not None:
+        if denoiser is None:
+            raise InputError("this frame is to be denoised, which needs Blender's denoiser")
+        albedo_normal = guides.result()[0]
+        tick = time.perf_counter()
+        image = denoiser(image, albedo_normal[..., :3], albedo_normal[..., 3:])
+        denoise_seconds = time.perf_counter() - tick
     mode = record.mode
     attributes = {"xsl_render:mode": mode, "xsl_render:max_spp": options.max_spp,
                   "xsl_render:seed": options.seed,
@@ -86,7 +101,7 @@ def composite_frame(files: FrameFiles, groups: int | None = None) -> CompositeRe
         "gold_samples": plan.gold_samples, "ideal_speedup": plan.ideal_speedup,
         "renders": len(plan.rects), "render_s": render_seconds,
         "phases_s": {"maps": float(record.data.get("seconds", {}).get("total", 0.0)),
-                     "renders": render_seconds, "composite": 0.0},
+                     "renders": render_seconds, "composite": 0.0, "denoise": denoise_seconds},
         "tiles": [{**rect.to_dict(), "seconds": tile.get("seconds"), "group": tile.get("group"),
                    "samples_rendered": tile.get("samples_rendered")}
                   for rect, tile in zip(plan.rects, tiles)],

@@ -38,6 +38,8 @@ from .tile_plan import Rect, TilePlan
 
 RECORD_FORMAT = 1
 TILE_CHANNELS = ["R", "G", "B", "A", "samples"]
+#: With denoising, a rectangle also keeps Cycles' denoising albedo and normal for the composite.
+GUIDE_CHANNELS = ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z"]
 
 
 def json_digest(data) -> str:
@@ -266,14 +268,16 @@ def remove_partial_files(path: Path) -> None:
 
 
 def write_tile(files: FrameFiles, record: PlanRecord, rect: Rect, pixels: np.ndarray,
-               samples: np.ndarray | int, details: dict) -> dict:
-    """Write a rectangle's image (RGBA + samples per pixel), then its record; return the record."""
+               samples: np.ndarray | int, details: dict, guides: np.ndarray | None = None) -> dict:
+    """Write a rectangle's image (RGBA + samples per pixel [+ denoising albedo and normal]),
+    then its record; return the record."""
     image, record_path = files.tile_image(rect), files.tile_record(rect)
     for path in (image, record_path):
         remove_partial_files(path)
     counts = np.broadcast_to(np.asarray(samples, np.float32), pixels.shape[:2])
-    data = np.ascontiguousarray(np.dstack([pixels[:, :, :4], counts]), dtype=np.float32)
-    write_exr(image, data, TILE_CHANNELS)
+    layers = [pixels[:, :, :4], counts] + ([guides[:, :, :6]] if guides is not None else [])
+    data = np.ascontiguousarray(np.dstack(layers), dtype=np.float32)
+    write_exr(image, data, TILE_CHANNELS + (GUIDE_CHANNELS if guides is not None else []))
     inputs = tile_inputs(record, rect)
     tile = {"format": RECORD_FORMAT, "kind": "xsl-render farm tile", "inputs": json_digest(inputs),
             "inputs_detail": inputs, "image": image.name, "image_sha256": file_sha256(image),
@@ -285,10 +289,11 @@ def write_tile(files: FrameFiles, record: PlanRecord, rect: Rect, pixels: np.nda
     return tile
 
 
-def read_tile(files: FrameFiles, rect: Rect) -> tuple[np.ndarray, np.ndarray]:
-    """(RGBA pixels (h, w, 4), samples per pixel (h, w)) of a rectangle's image."""
+def read_tile(files: FrameFiles, rect: Rect) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(RGBA pixels (h, w, 4), samples per pixel (h, w), denoising guides (h, w, 6) or None)."""
     data = read_image(files.tile_image(rect))
-    if data.shape != (rect.height, rect.width, len(TILE_CHANNELS)):
+    plain, guided = len(TILE_CHANNELS), len(TILE_CHANNELS) + len(GUIDE_CHANNELS)
+    if data.shape[:2] != (rect.height, rect.width) or data.shape[2] not in (plain, guided):
         raise InputError(f"{files.tile_image(rect)} holds {data.shape} values, not the "
                          f"{rect.height}x{rect.width} rectangle")
-    return data[:, :, :4], data[:, :, 4]
+    return data[:, :, :4], data[:, :, 4], (data[:, :, plain:] if data.shape[2] == guided else None)

@@ -57,6 +57,10 @@ class RenderOptions:
         the noise the plain plan would leave there).
     resolution
         (width, height) to render at instead of the scene's own (percentage taken as 100).
+    denoise
+        Denoise the finished frame with Open Image Denoise (Cycles' own denoiser), guided by
+        albedo and normal passes, the same way in every mode; tiles are never denoised one
+        by one (that would seam). ``addon.denoise`` says why this is on by default.
     """
 
     max_spp: int
@@ -69,6 +73,7 @@ class RenderOptions:
     render_cost: int = 1024
     adaptive_threshold: float | None = None
     resolution: tuple[int, int] | None = None
+    denoise: bool = True
 
     def check(self) -> "RenderOptions":
         """Raise InputError naming the first impossible option; return self."""

@@ -179,7 +179,7 @@ def test_bundle_folder_must_be_new_empty_or_ours(tmp_path):
 
 def planned_frame(tmp_path: Path, options=None, scene_digest="a" * 64):
     """A frame whose maps step is done: a director map file and plan.json."""
-    options = options or RenderOptions(max_spp=16, tile_size=16, resolution=(48, 32))
+    options = options or RenderOptions(max_spp=16, tile_size=16, resolution=(48, 32), denoise=False)
     files = FrameFiles(tmp_path / "output", 3)
     rng = np.random.default_rng(5)
     director = rng.random((32, 48)).astype(np.float32)
@@ -214,7 +214,8 @@ def test_tile_records_reject_missing_stale_and_damaged_images(tmp_path):
     assert valid_tile(files, record, rect) is None                         # never rendered
     fake_render(files, record, rect, 0.25)
     assert valid_tile(files, record, rect)["group"] == 1
-    pixels, samples = read_tile(files, rect)
+    pixels, samples, guides = read_tile(files, rect)
+    assert guides is None
     assert (pixels == 0.25).all() and (samples == rect.spp).all()
     other = planned_frame(tmp_path / "other", RenderOptions(max_spp=16, tile_size=16, seed=1,
                                                             resolution=(48, 32)))[0]

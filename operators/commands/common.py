@@ -77,6 +77,9 @@ def add_tile_arguments(parser) -> None:
                        help="Cycles adaptive sampling inside each rectangle, noise threshold "
                             "T / sqrt(spp / max-spp) (default: off)")
     parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                        help="denoise the finished frame with Open Image Denoise, guided by albedo "
+                             "and normal, the same in every mode (default on)")
 
 
 def render_options_from_args(args):
@@ -87,7 +90,7 @@ def render_options_from_args(args):
         max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=parse_resolution(args.resolution)).check()
+        resolution=parse_resolution(args.resolution), denoise=args.denoise).check()
 
 
 def map_options_from_args(args) -> MapOptions:

@@ -95,6 +95,13 @@ def _tiles(args) -> int:
     return 0
 
 
+def _blender_denoiser(rgba, albedo, normal):
+    """Blender's Open Image Denoise, loaded only when a frame is to be denoised."""
+    from ...addon.denoise import denoise
+
+    return denoise(rgba, albedo, normal)
+
+
 def _composite(args) -> int:
     from ...core.farm_composite import composite_frame
     from ...core.farm_files import FrameFiles
@@ -103,7 +110,7 @@ def _composite(args) -> int:
     if args.groups is not None:
         check_groups(args.groups)
     files = FrameFiles(Path(args.output), args.frame)
-    result = composite_frame(files, args.groups)
+    result = composite_frame(files, args.groups, denoiser=_blender_denoiser)
     stats = result.stats
     state = "already done" if result.skipped else "written"
     print(f"frame {args.frame}: {files.image} {state}: {stats['resolution'][0]}x{stats['resolution'][1]}, "

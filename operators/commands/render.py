@@ -59,6 +59,12 @@ def _read_budget(path: str) -> dict:
     return data
 
 
+def _render_budget(stats: dict) -> float:
+    """Wall time an equal-time run may render for: the selective run's, less its denoising
+    (the equal-time run denoises its own frame after Cycles stops, just as long)."""
+    return float(stats["wall_s"]) - float(stats.get("phases_s", {}).get("denoise", 0.0))
+
+
 def _budget(args) -> dict:
     """Check the mode's inputs before the scene is opened; return what the mode needs."""
     stats = _read_budget(args.budget_from) if args.budget_from else None
@@ -73,7 +79,7 @@ def _budget(args) -> dict:
             if args.equal_time < 0:
                 if stats is None:
                     raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-                return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+                return {"seconds": _render_budget(stats), "from": args.budget_from}
             if args.equal_time <= 0:
                 raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
             return {"seconds": args.equal_time}
@@ -87,7 +93,7 @@ def _budget(args) -> dict:
         if args.equal_time is not None and args.equal_time > 0:
             return {"seconds": args.equal_time}
         if stats is not None:
-            return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+            return {"seconds": _render_budget(stats), "from": args.budget_from}
         raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
     return {}
 
