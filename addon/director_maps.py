@@ -106,8 +106,8 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
     info = {
         "scene": scene.name, "frame": frame_done, "size": [camera.width, camera.height],
         "camera": scene.camera.name, "options": options.to_dict(), "seconds": seconds,
-        "x": xres.info, "snapshot": {"samples": snapshot.samples, "seed": 0,
-                                     "bounces": 0, "volumes": False},
+        "x": xres.info, "snapshot": {"samples": snapshot.samples, "seed": 0, "bounces": 0,
+                                     "volumes": False, "denoised": snapshot.denoised},
         "s": {"model": "Itti, Koch and Niebur 1998 on the tone-mapped snapshot plus 1 - X"},
         "l": light_info, "warnings": list(dict.fromkeys(notes)),
     }
