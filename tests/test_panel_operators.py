@@ -84,6 +84,19 @@ def test_panel_draws_every_setting_and_button(blender, fog):
     assert not any(panel.poll(context) for panel in ui.CLASSES[1:])
 
 
+def test_preferences_hold_every_default(blender, addon):
+    from ui_stub import StubLayout
+
+    from xsl_render.addon.preferences import XSL_AP_preferences
+
+    log = []
+    prefs = SimpleNamespace(layout=StubLayout(blender, log), bl_rna=XSL_AP_preferences.bl_rna)
+    XSL_AP_preferences.draw(prefs, blender.context)
+    assert [entry[2] for entry in log if entry[0] == "prop"] == list(SETTING_NAMES)
+    defaults = {name: XSL_AP_preferences.bl_rna.properties[name].default for name in SETTING_NAMES}
+    assert defaults == pytest.approx(builtin_defaults())
+
+
 def test_operators_show_the_command_line_results_and_restore_the_scene(blender, fog):
     from xsl_render.addon.director_maps import compute_maps
     from xsl_render.addon.image_display import read_pixels

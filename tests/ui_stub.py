@@ -1,6 +1,7 @@
 """Draw Blender panels and menus headlessly: a stand-in for ``UILayout`` that records what a
 ``draw()`` asks for and checks it against RNA (a property that does not exist, an operator
-that is not registered or an operator property it does not have fails at once)."""
+that is not registered or an operator property it does not have, a keyword argument or an
+icon the real ``UILayout`` does not take fails at once)."""
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -30,32 +31,52 @@ class StubLayout:
         self.active = self.enabled = True
         self.use_property_split = self.use_property_decorate = False
 
-    def _child(self, *args, **kwargs) -> "StubLayout":
-        return StubLayout(self._bpy, self.log)
+    def _check(self, function: str, kwargs: dict) -> None:
+        """The keywords (and icon) the real UILayout.<function> accepts."""
+        parameters = self._bpy.types.UILayout.bl_rna.functions[function].parameters
+        unknown = set(kwargs) - set(parameters.keys())
+        if unknown:
+            raise TypeError(f"UILayout.{function}() takes no {sorted(unknown)}")
+        if "icon" in kwargs and kwargs["icon"] not in parameters["icon"].enum_items.keys():
+            raise TypeError(f"no icon {kwargs['icon']}")
 
-    row = column = box = split = grid_flow = column_flow = _child
+    def _child(self, function: str):
+        def make(**kwargs) -> "StubLayout":
+            self._check(function, kwargs)
+            return StubLayout(self._bpy, self.log)
+        return make
+
+    def __getattr__(self, name: str):
+        if name in ("row", "column", "box", "split", "grid_flow", "column_flow"):
+            return self._child(name)
+        raise AttributeError(name)
 
     def prop(self, data, name: str, **kwargs) -> None:
+        self._check("prop", kwargs)
         if name not in data.bl_rna.properties.keys():
             raise AttributeError(f"{data.bl_rna.identifier} has no property '{name}'")
         self.log.append(("prop", data, name))
 
     def operator(self, idname: str, **kwargs) -> OperatorCall:
+        self._check("operator", kwargs)
         return OperatorCall(self._bpy, idname, self.log)
 
     def menu(self, idname: str, **kwargs) -> None:
+        self._check("menu", kwargs)
         if not hasattr(self._bpy.types, idname):
             raise AttributeError(f"no menu {idname}")
         self.log.append(("menu", idname))
 
-    def label(self, text: str = "", **kwargs) -> None:
-        self.log.append(("label", text))
+    def label(self, **kwargs) -> None:
+        self._check("label", kwargs)
+        self.log.append(("label", kwargs.get("text", "")))
 
-    def progress(self, factor: float = 0.0, type: str = "BAR", text: str = "") -> None:
-        self.log.append(("progress", factor, text))
+    def progress(self, **kwargs) -> None:
+        self._check("progress", kwargs)
+        self.log.append(("progress", kwargs.get("factor"), kwargs.get("text")))
 
     def separator(self, **kwargs) -> None:
-        pass
+        self._check("separator", kwargs)
 
 
 def draw(bpy, cls, context, method: str = "draw") -> list:
