@@ -8,7 +8,7 @@ the order of operations included), so an evaluated density is the one Cycles ren
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from .shader_math import (BLEND_MODES, MATH_OPERATIONS, blend_colors, math_op, s
 
 F32 = np.float32
 #: Nodes whose outputs depend on where they are evaluated.
-POSITION_NODES = ("TEX_COORD", "NEW_GEOMETRY")
+POSITION_NODES = ("TEX_COORD", "NEW_GEOMETRY", "ATTRIBUTE", "VOLUME_INFO")
 
 
 @dataclass
@@ -28,12 +28,27 @@ class NodeContext:
     ``points`` are world-space positions (N, 3). ``world_to_object`` is the inverse world
     matrix of the object owning the volume (None for the world volume, whose Object and
     Generated coordinates are world positions, as in Cycles). ``texspace`` is the mesh's
-    texture space (location, size) for Generated coordinates.
+    texture space (location, size) for Generated coordinates. ``grids`` are the voxel
+    grids of a volume object by name (``core.voxel_grid.VoxelGrid``), read by the Principled
+    Volume's attributes, Attribute and Volume Info nodes.
     """
 
     points: np.ndarray
     world_to_object: np.ndarray | None = None
     texspace: tuple[tuple, tuple] | None = None
+    grids: dict | None = None
+    _grid_values: dict = field(default_factory=dict)
+
+    def grid(self, name: str):
+        """The grid ``name`` at the points ((N,) or (N, 3)), or None when there is none."""
+        if not self.grids or not name or name not in self.grids:
+            return None
+        if name not in self._grid_values:
+            local = self.points if self.world_to_object is None else (
+                self.points @ np.asarray(self.world_to_object)[:3, :3].T
+                + np.asarray(self.world_to_object)[:3, 3])
+            self._grid_values[name] = self.grids[name].sample(local).astype(F32)
+        return self._grid_values[name]
 
 
 def _transform(matrix, points):
@@ -356,6 +371,58 @@ def _mix_rgb(ev, node):
     return {"Color": np.asarray(result, F32)}
 
 
+# ---------------------------------------------------------------------------------------
+# Volume object grids
+
+#: Volume Info outputs and the grids (Cycles' standard volume attributes) they read.
+VOLUME_INFO_GRIDS = {"Color": "color", "Density": "density", "Flame": "flame",
+                     "Temperature": "temperature"}
+
+
+def _grid_outputs(value):
+    """Cycles' Attribute node outputs of a float or vector grid value (``svm_node_attr``):
+    a float grid gives Color (v, v, v); a vector grid gives Fac = the channels' average."""
+    if value.ndim == 1:
+        color = np.repeat(value[:, None], 3, axis=1)
+        return {"Color": color, "Vector": color, "Fac": value, "Alpha": F32(1.0)}
+    return {"Color": value, "Vector": value, "Fac": value.mean(axis=1).astype(F32), "Alpha": F32(1.0)}
+
+
+def _attribute(ev, node):
+    value = ev.context.grid(node.props.get("attribute_name", ""))
+    if value is None:
+        raise ValueError(f"{node.name}: no grid '{node.props.get('attribute_name')}' to read")
+    return _grid_outputs(value)
+
+
+def _volume_info(ev, node):
+    out = {}
+    for socket in node.props.get("used_outputs", ()):
+        value = ev.context.grid(VOLUME_INFO_GRIDS.get(socket, ""))
+        if value is None:
+            raise ValueError(f"{node.name}: no grid for output {socket}")
+        out[socket] = _grid_outputs(value)["Color" if socket == "Color" else "Fac"]
+    return out
+
+
+def grid_names(nodes) -> set[str]:
+    """Names of the grids a shader graph's nodes read (Principled Volume attributes,
+    Attribute nodes, Volume Info outputs)."""
+    names = set()
+    for node in nodes:
+        if node.type == "PRINCIPLED_VOLUME":
+            for key in ("Density Attribute", "Color Attribute"):
+                value = node.inputs.get(key)
+                if isinstance(value, str) and value:
+                    names.add(value)
+        elif node.type == "ATTRIBUTE":
+            names.add(node.props.get("attribute_name", ""))
+        elif node.type == "VOLUME_INFO":
+            names.update(VOLUME_INFO_GRIDS[s] for s in node.props.get("used_outputs", ())
+                         if s in VOLUME_INFO_GRIDS)
+    return names
+
+
 NODE_FUNCTIONS = {
     "VALUE": _value, "RGB": _rgb, "TEX_COORD": _tex_coord, "NEW_GEOMETRY": _geometry,
     "MAPPING": _mapping, "TEX_NOISE": _tex_noise, "TEX_GRADIENT": _tex_gradient,
@@ -363,6 +430,7 @@ NODE_FUNCTIONS = {
     "VALTORGB": _color_ramp, "SEPXYZ": _separate_xyz, "COMBXYZ": _combine_xyz,
     "SEPARATE_COLOR": _separate_color, "COMBINE_COLOR": _combine_color, "INVERT": _invert,
     "GAMMA": _gamma, "MIX": _mix, "MIX_RGB": _mix_rgb,
+    "ATTRIBUTE": _attribute, "VOLUME_INFO": _volume_info,
 }
 #: Outputs of position-reading nodes that numpy can evaluate (the rest need Cycles).
 SUPPORTED_OUTPUTS = {"TEX_COORD": {"Generated", "Object"}, "NEW_GEOMETRY": {"Position"}}
@@ -387,6 +455,8 @@ def unsupported_reason(node_type: str, props: dict, used_outputs: set[str]) -> s
             return f"{node_type.lower()} {props.get(key, '').lower()}"
     if node_type in ("SEPARATE_COLOR", "COMBINE_COLOR") and props.get("mode", "RGB") != "RGB":
         return f"{node_type.lower()} in {props.get('mode')} mode"
+    if node_type == "ATTRIBUTE" and props.get("attribute_type", "GEOMETRY") != "GEOMETRY":
+        return f"attribute node of type {str(props.get('attribute_type')).lower()}"
     if node_type == "MIX" and props.get("data_type") not in ("FLOAT", "VECTOR", "RGBA"):
         return f"mix of {str(props.get('data_type')).lower()}"
     if props.get("from_instancer"):
