@@ -101,9 +101,14 @@ def oracle_scene(scene, include: list[VolumeMedium] | None = None, samples: int 
                 add_slot(ob.data, factory.emission())
                 continue
             grids = _grid_names(ob, depsgraph)
+            rendered = _rendered_materials(ob, depsgraph)
             for index, slot in enumerate(ob.material_slots):
                 keep = keep_slots is None or (ob.name, index) in keep_slots
-                state.swap_material(ob, index, factory.copy(slot.material, keep, grids))
+                # The copy replaces what Cycles renders in this slot: the evaluated
+                # geometry's material (geometry nodes may set it) unless the slot is the
+                # object's own; an object-linked copy overrides either.
+                material = rendered.get(index, slot.material)
+                state.swap_material(ob, index, factory.copy(material, keep, grids), link="OBJECT")
         scene.world = factory.world(scene.world, keep_world, sky)
         yield scene
 
@@ -122,6 +127,12 @@ def _full_size(scene) -> tuple[int, int]:
 
     width, height = render_size(scene)
     return height, width
+
+
+def _rendered_materials(ob, depsgraph) -> dict:
+    """Material per slot index of the evaluated object (what Cycles renders)."""
+    evaluated = ob.evaluated_get(depsgraph)
+    return {index: slot.material for index, slot in enumerate(evaluated.material_slots)}
 
 
 def _grid_names(ob, depsgraph) -> frozenset:

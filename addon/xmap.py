@@ -1,9 +1,10 @@
 """The X map and Z buffer of a scene's active camera: the addon API of paper section 4.1.
 
-``compute_x_map(scene)`` scans the evaluated scene, casts the camera rays (or reuses the
-ones cached next to the maps when camera and geometry are unchanged), integrates the
-media numpy can evaluate and asks Cycles for the transmittance of the others (OpenVDB
-smoke, unsupported shader nodes), and returns X, Z and what it did.
+``compute_x_map(scene)`` scans the evaluated scene (reading the grids of OpenVDB volume
+objects through geometry nodes), casts the camera rays (or reuses the ones cached next to
+the maps when camera and geometry are unchanged), integrates the media numpy can evaluate
+and asks Cycles for the transmittance of the others (unsupported shader nodes, grids that
+cannot be read), and returns X, Z and what it did.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import numpy as np
 
 from ..core.camera_rays import CameraRays, load_rays, save_rays
 from ..core.media import VolumeMedium
-from ..core.transmittance import DEFAULT_SAMPLES
+from ..core.transmittance import DEFAULT_SAMPLES, DEFAULT_TOLERANCE
 from ..core.xmap import XMapWarning, luminance, x_map_from_cached_rays
 from .scene_geometry import geometry_digest, scan_scene
 from .scene_probe import camera_model
@@ -47,19 +48,21 @@ class XMapResult:
 def compute_x_map(scene, cache_dir: str | Path | None = None, minbound: bool = True,
                   depsgraph=None, samples: int = DEFAULT_SAMPLES,
                   oracle_scale: float = ORACLE_SCALE, oracle_samples: int = ORACLE_SAMPLES,
+                  tolerance: float | None = DEFAULT_TOLERANCE,
                   ) -> tuple[np.ndarray, np.ndarray, dict]:
     """X map and Z buffer of the scene's active camera: ``(x, z, info)``.
 
     See :func:`compute_x_map_detailed` for the parameters.
     """
     result = compute_x_map_detailed(scene, cache_dir, minbound, depsgraph, samples,
-                                    oracle_scale, oracle_samples)
+                                    oracle_scale, oracle_samples, tolerance)
     return result.x, result.z, result.info
 
 
 def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound: bool = True,
                            depsgraph=None, samples: int = DEFAULT_SAMPLES,
                            oracle_scale: float = ORACLE_SCALE, oracle_samples: int = ORACLE_SAMPLES,
+                           tolerance: float | None = DEFAULT_TOLERANCE,
                            ) -> XMapResult:
     """X map and Z buffer of the scene's active camera at the current frame.
 
@@ -74,10 +77,14 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
     depsgraph : optional
         The evaluated depsgraph (default: the context's).
     samples : int
-        Midpoint samples per ray interval for heterogeneous media.
+        Midpoint samples per ray interval for heterogeneous media when every ray is
+        marched (``tolerance`` None).
     oracle_scale, oracle_samples
         Resolution fraction and samples of the Cycles render used for media numpy cannot
         evaluate.
+    tolerance : float or None
+        Transmittance tolerance of the adaptive ray grid for heterogeneous media
+        (``core.ray_grid_depth``); None marches every pixel's ray (slow, a reference).
 
     Returns
     -------
@@ -122,7 +129,7 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
         warnings.simplefilter("always", XMapWarning)
         x, transmittance, details = x_map_from_cached_rays(
             rays, [m for m in media if m.evaluable], minbound=minbound,
-            extra_tau=extra_tau, samples=samples)
+            extra_tau=extra_tau, samples=samples, tolerance=tolerance)
     # Light sources and emissive surfaces need the transmittance without MinBound's fill.
     x_plain = x if not minbound else rays.full_frame(
         np.where(rays.hit, luminance(transmittance), 0.0), fill=0.0)
@@ -144,6 +151,7 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
         "minbound": {"enabled": minbound, "value": details["minbound"]},
         "sky_pixels": details["sky_pixels"],
         "samples_per_interval": samples,
+        "grid_tolerance": tolerance,
         "warnings": details["warnings"],
         "seconds": timings,
     }
