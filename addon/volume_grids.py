@@ -124,6 +124,9 @@ def _read_grid(scene, ob, name: str, data_type: str, lo: np.ndarray, hi: np.ndar
             bpy.data.objects.remove(probe)
         bpy.data.meshes.remove(mesh)
         bpy.data.node_groups.remove(tree)
+        # The depsgraph still holds the removed helper until it is evaluated again; a
+        # later walk over its instances would meet freed memory.
+        bpy.context.evaluated_depsgraph_get().update()
     values = values.reshape(len(index), channels) if channels > 1 else values
     background = float(np.max(np.abs(values[-1])))
     return values[:-1].reshape(shape + ((channels,) if channels > 1 else ())), background

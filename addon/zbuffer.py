@@ -105,7 +105,8 @@ def _segment_hits_box(o, d, t0, t1, lo, hi):
     near = np.nanmax(np.minimum(a, b), axis=1)
     far = np.nanmin(np.maximum(a, b), axis=1)
     pad = 1e-6 * np.maximum(1.0, np.abs(far))
-    return (near <= far + pad) & (far >= t0 - pad) & (near <= t1 + pad)
+    with np.errstate(invalid="ignore"):         # inf - inf where a ray never leaves the box
+        return (near <= far + pad) & (far >= t0 - pad) & (near <= t1 + pad)
 
 
 def _convex_intervals(tris: Triangles, normals, o, d, near, far):
