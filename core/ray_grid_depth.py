@@ -7,19 +7,20 @@ marched. Along each, the cumulative optical depth
 
     C(t) = integral from lo to t of kappa(origin + t direction) dt
 
-is tabulated at a fixed step (trapezoid rule) from ``lo``, the nearest entry into the
-medium of the pixels around the node, to their farthest exit. A pixel's optical depth is
-the sum over its own exact intervals [t0, t1] (from the ray cache) of C(t1) - C(t0), with
-C interpolated linearly in t along each of the four surrounding node rays and bilinearly
-across them. Where a medium starts and stops is therefore exact for every pixel; only the
-density between those boundaries is sampled coarsely. The extinction field must be
-defined all along the node rays, also outside the medium's mesh, which shader textures
-and voxel grids are (Cycles would evaluate them there too).
+is tabulated at a fixed step from ``lo``, the nearest entry into the medium of the pixels
+around the node, to their farthest exit (``core.depth_profiles``: fourth-order steps,
+cubic Hermite lookups in between). A pixel's optical depth is the sum over its own exact
+intervals [t0, t1] (from the ray cache) of C(t1) - C(t0), with C read at those distances
+along each of the four surrounding node rays and interpolated bilinearly across them.
+Where a medium starts and stops is therefore exact for every pixel; only the density
+between those boundaries is sampled coarsely. The extinction field must be defined all
+along the node rays, also outside the medium's mesh, which shader textures and voxel
+grids are (Cycles would evaluate them there too).
 
 The grid adapts to the field. It starts with nodes every ``FIRST_SPACING`` pixels. Each
 block of it is checked against the grid of half its spacing (whose extra nodes are
-marched for the check): if some pixel of the block changes its transmittance by more than
-``tolerance``, the block is split in four and each quarter is checked the same way, down
+marched for the check): if the transmittance of an interval that starts where the block's
+pixels enter the medium changes by more than ``tolerance``, the block is split in four and each quarter is checked the same way, down
 to one node per pixel, where every pixel's own ray is marched. Accepted blocks keep the
 finer grid's values. The depth step is chosen once per medium on the first grid: halved
 until halving it again moves no transmittance by more than ``tolerance``.
@@ -32,6 +33,7 @@ import numpy as np
 from scipy import ndimage
 
 from .camera_rays import RayModel
+from .depth_profiles import Profiles, step_integrals
 
 #: Largest transmittance change (any channel) a grid block may show against the grid of
 #: half its spacing before it is split; the same bound picks the depth step. Accepted
@@ -76,86 +78,6 @@ class GridReport:
                 f"depth step {self.depth_step:.3g}; pixels by node spacing {spacing})")
 
 
-def _step_integrals(kappa: np.ndarray, starts: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """Integral over the step that ends at each sample, in units of the step length.
-
-    Samples are laid out node after node, node i's from ``starts[i]``, ``count[i]`` steps.
-    Every step is integrated by the cubic through four neighbouring samples (exact for a
-    cubic field): centred, (-f[j-1] + 13 f[j] + 13 f[j+1] - f[j+2]) / 24, inside a node;
-    one-sided, (9 f0 + 19 f1 - 5 f2 + f3) / 24, at its first and last step. Nodes of two
-    steps use the parabola (5 f0 + 8 f1 - f2) / 12, of one step the trapezoid. A node's
-    first sample gets 0. Negative results (a rule overshooting at a jump of the
-    non-negative field) are clipped."""
-    out = np.empty_like(kappa)
-    out[2:-1] = (13.0 * (kappa[1:-2] + kappa[2:-1]) - kappa[:-3] - kappa[3:]) / 24.0
-    ends = starts + count
-    one = ends[count == 1]
-    out[one] = 0.5 * (kappa[one] + kappa[one - 1])
-    two = count == 2
-    first, last = starts[two] + 1, ends[two]
-    out[first] = (5.0 * kappa[first - 1] + 8.0 * kappa[first] - kappa[first + 1]) / 12.0
-    out[last] = (5.0 * kappa[last] + 8.0 * kappa[last - 1] - kappa[last - 2]) / 12.0
-    more = count >= 3
-    first, last = starts[more] + 1, ends[more]
-    out[first] = (9.0 * kappa[first - 1] + 19.0 * kappa[first] - 5.0 * kappa[first + 1]
-                  + kappa[first + 2]) / 24.0
-    out[last] = (9.0 * kappa[last] + 19.0 * kappa[last - 1] - 5.0 * kappa[last - 2]
-                 + kappa[last - 3]) / 24.0
-    out[starts] = 0.0
-    return np.maximum(out, 0.0, out=out)
-
-
-class _Profiles:
-    """C(t) of every node ray marched so far, found by the node's pixel position.
-
-    While every profile is grey (the same extinction in all three channels, as for a
-    medium of white or grey colour) only the first channel is looked up."""
-
-    def __init__(self, shape: tuple[int, int]):
-        self.slot = np.full(shape, -1, dtype=np.int64)
-        self.lo = np.zeros(0)
-        self.step = np.ones(0)
-        self.count = np.zeros(0, dtype=np.int64)
-        self.offset = np.zeros(0, dtype=np.int64)
-        self.values = np.zeros((0, 3))
-        self.slopes = np.zeros((0, 3))
-        self.grey = True
-
-    def add(self, rows, cols, lo, step, count, values, slopes) -> None:
-        self.slot[rows, cols] = len(self.lo) + np.arange(len(rows))
-        starts = len(self.values) + np.concatenate([[0], np.cumsum(count + 1)[:-1]])
-        self.lo = np.concatenate([self.lo, lo])
-        self.step = np.concatenate([self.step, step])
-        self.count = np.concatenate([self.count, count])
-        self.offset = np.concatenate([self.offset, starts])
-        self.values = np.concatenate([self.values, values])
-        self.slopes = np.concatenate([self.slopes, slopes])
-        self.grey = self.grey and bool(np.all(slopes[:, 1:] == slopes[:, :1]))
-        self._channels = None
-
-    def _arrays(self):
-        if self._channels is None:
-            pick = slice(0, 1) if self.grey else slice(0, 3)
-            self._channels = (np.ascontiguousarray(self.values[:, pick]),
-                              np.ascontiguousarray(self.slopes[:, pick]))
-        return self._channels
-
-    def at(self, slots: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """C (K, 1 or 3) of node ``slots`` at distances ``t``: the cubic Hermite curve
-        through the samples, whose slopes are the extinction there (C' = kappa)."""
-        values, slopes = self._arrays()
-        step = self.step[slots]
-        f = (t - self.lo[slots]) / step
-        i = np.minimum(np.maximum(np.floor(f), 0), self.count[slots] - 1).astype(np.int64)
-        s = np.minimum(np.maximum(f - i, 0.0), 1.0)[:, None]
-        base = self.offset[slots] + i
-        h = step[:, None]
-        c0, c1 = values[base], values[base + 1]
-        k0, k1 = slopes[base] * h, slopes[base + 1] * h
-        d = c1 - c0
-        return c0 + s * (k0 + s * (3.0 * d - 2.0 * k0 - k1 + s * (k0 + k1 - 2.0 * d)))
-
-
 class _Grid:
     """One medium's integration over one window of rays."""
 
@@ -182,7 +104,7 @@ class _Grid:
         self.lo_image = np.pad(lo.reshape(shape), pad, constant_values=np.inf)
         self.hi_image = np.pad(hi.reshape(shape), pad, constant_values=-np.inf)
         self._ranges: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self.profiles = _Profiles((self.rows_pad + 1, self.cols_pad + 1))
+        self.profiles = Profiles((self.rows_pad + 1, self.cols_pad + 1))
         self.step = None
         self.report = GridReport(pixels_by_spacing={})
 
@@ -220,7 +142,7 @@ class _Grid:
         kappa = np.maximum(kappa, 0.0)
         grey = bool(np.all(kappa[:, 1:] == kappa[:, :1]))
         channels = kappa[:, :1] if grey else kappa
-        pieces = _step_integrals(channels, starts, count) * node_step[node, None]
+        pieces = step_integrals(channels, starts, count) * node_step[node, None]
         running = np.cumsum(pieces, axis=0)
         values = running - np.repeat(running[starts], count + 1, axis=0)
         if grey:
@@ -241,8 +163,8 @@ class _Grid:
 
     # --- pixels ---------------------------------------------------------------------
     def _tau(self, pick: np.ndarray, spacing: np.ndarray) -> np.ndarray:
-        """Optical depth (intervals, channels) of the intervals ``pick``, each on the grid
-        of its own ``spacing``."""
+        """Optical depth (len(pick), 1 or 3 channels) of the intervals ``pick``, each read
+        from the grid of its own ``spacing`` (an array, one per interval)."""
         rows, cols = self.rows[pick], self.cols[pick]
         row0, col0 = (rows // spacing) * spacing, (cols // spacing) * spacing
         v = ((rows - row0) / spacing)[:, None]
@@ -362,7 +284,7 @@ class _Grid:
         over intervals from any of ``starts`` (or the ray's lo) to anywhere along them."""
         profiles = []
         for profile in (coarse, fine):
-            p = _Profiles((1, nodes))
+            p = Profiles((1, nodes))
             p.add(np.zeros(nodes, dtype=np.int64), np.arange(nodes), *profile)
             profiles.append(p)
         lo, length = coarse[0], coarse[1] * coarse[2]

@@ -9,7 +9,8 @@ from scipy import ndimage
 from xsl_render.core.camera import CameraModel
 from xsl_render.core.camera_rays import CameraRays, fit_ray_model
 from xsl_render.core.media import VolumeMedium
-from xsl_render.core.ray_grid_depth import _Profiles, _step_integrals, grid_optical_depth
+from xsl_render.core.depth_profiles import Profiles, step_integrals
+from xsl_render.core.ray_grid_depth import grid_optical_depth
 from xsl_render.core.shader_graph import Link, Node, ShaderGraph
 from xsl_render.core.transmittance import medium_segments
 from xsl_render.core.voxel_grid import VoxelGrid, VoxelRegion
@@ -138,13 +139,13 @@ def test_step_rules_are_exact_for_cubic_extinction():
     the Hermite lookup between samples is exact for a quadratic field (C is a cubic)."""
     t = np.linspace(0.5, 2.5, 9)                          # one node ray, 8 steps
     kappa = (t ** 3 - t + 1.0)[:, None]
-    pieces = _step_integrals(kappa, np.array([0]), np.array([8])) * (t[1] - t[0])
+    pieces = step_integrals(kappa, np.array([0]), np.array([8])) * (t[1] - t[0])
     running = np.cumsum(pieces, axis=0)[:, 0]
     exact = (t ** 4 / 4 - t ** 2 / 2 + t) - (t[0] ** 4 / 4 - t[0] ** 2 / 2 + t[0])
     assert np.allclose(running, exact, atol=1e-12)
     quadratic = (t ** 2)[:, None] * np.ones(3)           # C = t^3 / 3 is a cubic
     c = ((t ** 3 - t[0] ** 3) / 3)[:, None] * np.ones(3)
-    profiles = _Profiles((1, 1))
+    profiles = Profiles((1, 1))
     profiles.add(np.array([0]), np.array([0]), np.array([t[0]]), np.array([t[1] - t[0]]),
                  np.array([8]), c, quadratic)
     probe = np.linspace(0.5, 2.5, 41)
