@@ -34,7 +34,7 @@ ORACLE_STEP_RATE = 0.05
 
 def render_transmittance(scene, include: list[VolumeMedium] | None = None, samples: int = 16,
                          scale: float = 1.0, step_rate: float = ORACLE_STEP_RATE,
-                         sky: float = 0.0) -> tuple[np.ndarray, float]:
+                         sky: float = 0.0, resize: bool = True) -> tuple[np.ndarray, float]:
     """Render exp(-tau) per channel for the whole frame: (H, W, 3) float32, row 0 on top.
 
     Parameters
@@ -46,8 +46,9 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
     samples : int
         Cycles samples per pixel (absorption-only media converge fast).
     scale : float
-        Render at this fraction of the resolution and resize to full size (the cheap
-        fallback for volumes numpy cannot evaluate).
+        Render at this fraction of the resolution (the cheap fallback for volumes numpy
+        cannot evaluate) and, with ``resize``, interpolate to full size; without, the
+        low-resolution render is returned (``core.guided_upsample`` does better at edges).
     step_rate : float
         Cycles' volume step rate. The oracle ray-marches (Cycles' "biased" volume mode):
         with an absorbing medium each sample is then a deterministic quadrature of the
@@ -69,7 +70,7 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
         passes = render_passes(scene, ("Combined",))
     rgb = passes["Combined"][:, :, :3]
     height, width = _full_size(scene)
-    if rgb.shape[:2] != (height, width):
+    if resize and rgb.shape[:2] != (height, width):
         from skimage.transform import resize
 
         rgb = resize(rgb, (height, width, 3), order=1, mode="edge", anti_aliasing=False)
