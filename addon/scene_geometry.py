@@ -7,7 +7,9 @@ or from camera rays left out) collects, in world space:
   material, which Cycles renders as its default surface);
 * the boundary of each object volume (faces with a volume-only material are not
   surfaces: rays pass through them into the medium);
-* the media themselves (``core.media.VolumeMedium``), the world volume first.
+* the media themselves (``core.media.VolumeMedium``), the world volume first; volume
+  objects with the grids their material reads (``addon.volume_grids``), or the reason
+  Cycles must measure them instead.
 
 A digest of the camera and all this geometry keys the ray cache: if it has not changed,
 the Z buffer and the media intervals on disk are still right, whatever the media's
@@ -153,7 +155,8 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                     key=f"{ob.name}#{count}:{i}", name=ob.name, kind="volume_object",
                     material=material.name, graph=graph_of(material.node_tree, f"mat:{material.name}"),
                     world_to_object=np.linalg.inv(m))
-                volume_objects.append((medium, ob.original, m, len(volume_slots)))
+                volume_objects.append((medium, ob.original, m, len(volume_slots),
+                                       _volume_interpolation(material)))
                 media.append(medium)
             continue
         vertices, triangles, material_index = _mesh_arrays(ob, mesh_cache)
@@ -189,8 +192,8 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             volumes[key] = _to_world(*_subset(vertices, triangles, boundary), m)
     # Reading grids adds (and removes) a helper object: only once the walk over the
     # depsgraph's instances is over, which that would invalidate.
-    for medium, original, matrix, count in volume_objects:
-        _attach_grids(medium, scene, original, depsgraph, matrix, count)
+    for medium, original, matrix, count, interpolation in volume_objects:
+        _attach_grids(medium, scene, original, depsgraph, matrix, count, interpolation)
     for medium in media:
         check_densities(medium)
     geometry = SceneGeometry(surfaces=Triangles.concatenate(surfaces), volumes=volumes)
@@ -201,8 +204,13 @@ def _reads_attributes(graph: ShaderGraph) -> bool:
     return any(node.type in ("ATTRIBUTE", "VOLUME_INFO") for node in graph.nodes.values())
 
 
+def _volume_interpolation(material) -> str:
+    settings = getattr(material, "cycles", None)
+    return getattr(settings, "volume_interpolation", "LINEAR")
+
+
 def _attach_grids(medium: VolumeMedium, scene, ob, depsgraph, object_to_world,
-                  volume_materials: int) -> None:
+                  volume_materials: int, interpolation: str) -> None:
     """Give a volume object's medium the grids its material reads and the region Cycles
     renders, or the reason it must go to Cycles instead."""
     graph = medium.graph
@@ -217,7 +225,7 @@ def _attach_grids(medium: VolumeMedium, scene, ob, depsgraph, object_to_world,
         return
     names = grid_names(graph.nodes.values())
     try:
-        grids, region = volume_grids(scene, ob, depsgraph, names, object_to_world)
+        grids, region = volume_grids(scene, ob, depsgraph, names, object_to_world, interpolation)
     except GridReadError as error:
         medium.unsupported = f"an OpenVDB volume object whose grids numpy cannot read: {error}"
         return

@@ -91,7 +91,7 @@ def optical_depth(rays: CameraRays, media: list[VolumeMedium], samples: int = DE
     report = []
     origins = rays.origins.reshape(-1, 3)
     directions = rays.directions.reshape(-1, 3)
-    model = fit_ray_model(rays) if tolerance is not None else None
+    model, fitted = None, False       # fitted once, when a medium first needs the ray grid
     for medium in media:
         start = time.perf_counter()
         index, t0, t1 = medium_segments(rays, medium, only)
@@ -100,17 +100,20 @@ def optical_depth(rays: CameraRays, media: list[VolumeMedium], samples: int = DE
             lengths = np.bincount(index, weights=t1 - t0, minlength=count)
             tau += lengths[:, None] * constant[None, :]
             method = "closed form"
-        elif model is not None:
-            grid_tau, grid = grid_optical_depth(model, rays.shape, medium.extinction, index, t0, t1,
-                                                tolerance)
-            tau += grid_tau
-            method = grid.describe()
         else:
-            counts = _sample_counts(t1 - t0, samples)
-            for n in np.unique(counts):
-                pick = counts == n
-                _march(tau, medium, origins, directions, index[pick], t0[pick], t1[pick], int(n))
-            method = f"midpoint rule, {_MIN_SAMPLES}..{samples} samples per interval"
+            if tolerance is not None and not fitted:
+                model, fitted = fit_ray_model(rays), True
+            if model is not None:
+                grid_tau, grid = grid_optical_depth(model, rays.shape, medium.extinction, index,
+                                                    t0, t1, tolerance)
+                tau += grid_tau
+                method = grid.describe()
+            else:
+                counts = _sample_counts(t1 - t0, samples)
+                for n in np.unique(counts):
+                    pick = counts == n
+                    _march(tau, medium, origins, directions, index[pick], t0[pick], t1[pick], int(n))
+                method = f"midpoint rule, {_MIN_SAMPLES}..{samples} samples per interval"
         report.append({"medium": medium.key, "method": method, "intervals": int(len(index)),
                        "seconds": time.perf_counter() - start})
     return tau.reshape(rays.shape + (3,)), report
