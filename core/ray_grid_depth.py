@@ -46,8 +46,14 @@ DEFAULT_TOLERANCE = 0.03
 FIRST_SPACING = 32
 #: Steps along the typical node ray the depth-step search starts from.
 FIRST_DEPTH_STEPS = 16
-#: Most steps along one node ray (bounds the cost of rays to a far clip end).
+#: Most steps along one node ray (bounds the cost of rays to a far clip end), and along
+#: the typical one (a field with detail finer than this is beyond any affordable step).
 MAX_DEPTH_STEPS = 2048
+MAX_TYPICAL_STEPS = 512
+#: Field evaluations allowed per pixel with a medium: what marching every pixel with 64
+#: samples cost. Refinement stops where going on would exceed it (a field with detail
+#: finer than the pixels); the grid of the level reached is used there.
+EVALUATIONS_PER_PIXEL = 64
 #: Extinction used where a field returns more than this: tau beyond ~50 is opaque anyway,
 #: and the running sum C(t) must not lose every digit of later intervals to one spike.
 _MAX_EXTINCTION = 1e6
@@ -70,12 +76,14 @@ class GridReport:
     evaluations: int = 0
     depth_step: float = 0.0
     pixels_by_spacing: dict | None = None
+    budget_reached: bool = False
 
     def describe(self) -> str:
         spacing = ", ".join(f"{s} px: {n}" for s, n in sorted(self.pixels_by_spacing.items(),
                                                                reverse=True))
+        budget = "; evaluation budget reached, finer detail not resolved" if self.budget_reached else ""
         return (f"adaptive ray grid ({self.nodes} node rays, {self.evaluations} evaluations, "
-                f"depth step {self.depth_step:.3g}; pixels by node spacing {spacing})")
+                f"depth step {self.depth_step:.3g}; pixels by node spacing {spacing}{budget})")
 
 
 class _Grid:
@@ -183,6 +191,13 @@ class _Grid:
         return padded.reshape(self.rows_pad // spacing, spacing, self.cols_pad // spacing,
                               spacing).any(axis=(1, 3))
 
+    def _refinement_cost(self, blocks: np.ndarray) -> float:
+        """Field evaluations the check of these blocks would take (their child nodes),
+        at the mean cost per node so far; every child counted, shared ones once each
+        side (an upper bound is what the budget needs)."""
+        per_node = self.report.evaluations / max(self.report.nodes, 1)
+        return 5.0 * int(blocks.sum()) * per_node
+
     @staticmethod
     def _corners(blocks: np.ndarray, spacing: int):
         bi, bj = np.nonzero(blocks)
@@ -270,7 +285,8 @@ class _Grid:
         while True:
             fine = self._march(rows, cols, lo, hi, step / 2)
             change = self._profile_change(coarse, fine, len(rows), starts)
-            if change <= self.tolerance or fine[2].max() >= MAX_DEPTH_STEPS:
+            if (change <= self.tolerance or fine[2].max() >= MAX_DEPTH_STEPS
+                    or typical / step >= MAX_TYPICAL_STEPS):
                 break
             step, coarse = step / 2, fine
         self.step = step / 2
@@ -309,10 +325,14 @@ class _Grid:
         self._choose_step(blocks)
         # The spacing of the grid each pixel's optical depth is read from.
         chosen = np.zeros((self.height, self.width), dtype=np.int64)
+        budget = EVALUATIONS_PER_PIXEL * int(self.has.sum())
         while blocks.any():
             self._ensure(*self._corners(blocks, spacing), radius=spacing)
             if spacing == 1:
                 accept, used = blocks, 1
+            elif self._refinement_cost(blocks) > budget - self.report.evaluations:
+                accept, used = blocks, spacing
+                self.report.budget_reached = True
             else:
                 change = self._split_change(blocks, spacing)
                 used = spacing // 2

@@ -134,6 +134,23 @@ def test_grid_refines_only_where_the_field_has_detail():
     assert error.mean() < 0.003 and error.max() < 0.03, (error.mean(), error.max())
 
 
+def test_detail_finer_than_the_pixels_costs_no_more_than_marching_every_ray():
+    rays = camera_rays(camera(width=64, height=48))
+
+    def grain(points):
+        # Thin columns along the view axis, narrower than a pixel: no grid resolves them.
+        columns = np.sin(60.0 * points[:, 0]) * np.sin(60.0 * points[:, 1]) > 0.0
+        return np.where(columns, 0.4, 0.02)[:, None] * np.ones(3)
+
+    index = np.arange(rays.count)
+    tau, report = grid_optical_depth(fit_ray_model(rays), rays.shape, grain, index,
+                                     rays.t_near.ravel(), rays.t_far.ravel())
+    assert report.budget_reached and "budget" in report.describe()
+    # The budget of 64 evaluations a pixel, plus the first grid's depth-step search.
+    assert report.evaluations < 64 * rays.count * 1.5
+    assert np.isfinite(tau).all() and (tau > 0).all()
+
+
 def test_step_rules_are_exact_for_cubic_extinction():
     """Every step is integrated through a cubic, so a cubic field integrates exactly, and
     the Hermite lookup between samples is exact for a quadratic field (C is a cubic)."""
