@@ -50,10 +50,13 @@ FIRST_DEPTH_STEPS = 16
 #: the typical one (a field with detail finer than this is beyond any affordable step).
 MAX_DEPTH_STEPS = 2048
 MAX_TYPICAL_STEPS = 512
-#: Field evaluations allowed per pixel with a medium: what marching every pixel with 64
-#: samples cost. Refinement stops where going on would exceed it (a field with detail
-#: finer than the pixels); the grid of the level reached is used there.
+#: Field evaluations allowed: per pixel with a medium, what marching every pixel with 64
+#: samples cost, but at least ``MIN_EVALUATIONS`` (small frames may march every pixel). A
+#: guard against fields with detail finer than the pixels, where the grid would end up
+#: marching every pixel at a fine step; the example scenes use about 1.5 a pixel.
+#: Refinement stops where going on would exceed it, and the grid reached is used there.
 EVALUATIONS_PER_PIXEL = 64
+MIN_EVALUATIONS = 4_000_000
 #: Extinction used where a field returns more than this: tau beyond ~50 is opaque anyway,
 #: and the running sum C(t) must not lose every digit of later intervals to one spike.
 _MAX_EXTINCTION = 1e6
@@ -191,12 +194,23 @@ class _Grid:
         return padded.reshape(self.rows_pad // spacing, spacing, self.cols_pad // spacing,
                               spacing).any(axis=(1, 3))
 
-    def _refinement_cost(self, blocks: np.ndarray) -> float:
-        """Field evaluations the check of these blocks would take (their child nodes),
-        at the mean cost per node so far; every child counted, shared ones once each
-        side (an upper bound is what the budget needs)."""
-        per_node = self.report.evaluations / max(self.report.nodes, 1)
-        return 5.0 * int(blocks.sum()) * per_node
+    def _refinement_cost(self, blocks: np.ndarray, spacing: int) -> float:
+        """Field evaluations the check of these blocks would take (their child nodes not
+        marched yet), at the mean cost per node so far."""
+        rows, cols, _ = self._children(blocks, spacing)
+        key = np.unique(rows * (self.cols_pad + 1) + cols)     # flat index into the slots
+        missing = int((self.profiles.slot.ravel()[key] < 0).sum())
+        return missing * self.report.evaluations / max(self.report.nodes, 1)
+
+    def _children(self, blocks: np.ndarray, spacing: int):
+        """Positions of the nodes of half the spacing inside and around each block (edge
+        midpoints and centre), and the block each belongs to."""
+        bi, bj = np.nonzero(blocks)
+        half = spacing // 2
+        offsets = ((half, 0), (0, half), (half, half), (spacing, half), (half, spacing))
+        rows = np.concatenate([bi * spacing + dr for dr, _ in offsets])
+        cols = np.concatenate([bj * spacing + dc for _, dc in offsets])
+        return rows, cols, np.tile(np.arange(len(bi)), len(offsets))
 
     @staticmethod
     def _corners(blocks: np.ndarray, spacing: int):
@@ -228,10 +242,7 @@ class _Grid:
         along the node ray."""
         bi, bj = np.nonzero(blocks)
         half = spacing // 2
-        offsets = ((half, 0), (0, half), (half, half), (spacing, half), (half, spacing))
-        rows = np.concatenate([bi * spacing + dr for dr, _ in offsets])
-        cols = np.concatenate([bj * spacing + dc for _, dc in offsets])
-        owner = np.tile(np.arange(len(bi)), len(offsets))
+        rows, cols, owner = self._children(blocks, spacing)
         self._ensure(rows, cols, radius=half)
         slots = self.profiles.slot[rows, cols]
         lo = self.profiles.lo[slots]
@@ -325,12 +336,12 @@ class _Grid:
         self._choose_step(blocks)
         # The spacing of the grid each pixel's optical depth is read from.
         chosen = np.zeros((self.height, self.width), dtype=np.int64)
-        budget = EVALUATIONS_PER_PIXEL * int(self.has.sum())
+        budget = max(EVALUATIONS_PER_PIXEL * int(self.has.sum()), MIN_EVALUATIONS)
         while blocks.any():
             self._ensure(*self._corners(blocks, spacing), radius=spacing)
             if spacing == 1:
                 accept, used = blocks, 1
-            elif self._refinement_cost(blocks) > budget - self.report.evaluations:
+            elif self._refinement_cost(blocks, spacing) > budget - self.report.evaluations:
                 accept, used = blocks, spacing
                 self.report.budget_reached = True
             else:
