@@ -1,4 +1,5 @@
-"""Cycles measures the transmittance itself: the truth for tests, the fallback for smoke.
+"""Cycles measures the transmittance itself: the truth for tests, and the fallback for
+media numpy cannot evaluate.
 
 The scene is rendered with every surface emitting exactly 1 (white) and nothing else
 lighting anything: lamps hidden, world surface black, no bounces. Each volume shader is
@@ -11,7 +12,10 @@ of a pixel go through its centre, like the X map's rays (Blackman-Harris: Cycles
 filter ignores the width and spreads samples over the whole pixel).
 
 Nothing of the user's is edited: materials, node groups and the world are copied, the
-copies assigned for the render (``addon.scene_state``), and everything is put back.
+copies assigned for the render (``addon.scene_state``), and everything is put back. The
+copies go into object-linked slots: a material that geometry nodes set on the evaluated
+geometry (Set Material) is what Cycles renders there, and only an object's own slot
+overrides it.
 """
 from __future__ import annotations
 
