@@ -25,7 +25,7 @@ import numpy as np
 from ..core.camera import CameraModel
 from ..core.media import VolumeMedium, check_densities
 from ..core.shader_graph import ShaderGraph, uses_default_coordinates
-from ..core.shader_nodes import grid_names
+from ..core.grid_nodes import grid_names
 from .scene_probe import renderable_instances
 from .shader_export import export_volume_graph, has_surface, has_volume
 from .volume_grids import GridReadError, volume_grids

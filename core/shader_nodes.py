@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import cycles_noise
+from .grid_nodes import attribute_node, volume_info_node
 from .shader_math import (BLEND_MODES, MATH_OPERATIONS, blend_colors, math_op, safe_divide,
                           safe_pow, sign)
 
@@ -371,58 +372,6 @@ def _mix_rgb(ev, node):
     return {"Color": np.asarray(result, F32)}
 
 
-# ---------------------------------------------------------------------------------------
-# Volume object grids
-
-#: Volume Info outputs and the grids (Cycles' standard volume attributes) they read.
-VOLUME_INFO_GRIDS = {"Color": "color", "Density": "density", "Flame": "flame",
-                     "Temperature": "temperature"}
-
-
-def _grid_outputs(value):
-    """Cycles' Attribute node outputs of a float or vector grid value (``svm_node_attr``):
-    a float grid gives Color (v, v, v); a vector grid gives Fac = the channels' average."""
-    if value.ndim == 1:
-        color = np.repeat(value[:, None], 3, axis=1)
-        return {"Color": color, "Vector": color, "Fac": value, "Alpha": F32(1.0)}
-    return {"Color": value, "Vector": value, "Fac": value.mean(axis=1).astype(F32), "Alpha": F32(1.0)}
-
-
-def _attribute(ev, node):
-    value = ev.context.grid(node.props.get("attribute_name", ""))
-    if value is None:
-        raise ValueError(f"{node.name}: no grid '{node.props.get('attribute_name')}' to read")
-    return _grid_outputs(value)
-
-
-def _volume_info(ev, node):
-    out = {}
-    for socket in node.props.get("used_outputs", ()):
-        value = ev.context.grid(VOLUME_INFO_GRIDS.get(socket, ""))
-        if value is None:
-            raise ValueError(f"{node.name}: no grid for output {socket}")
-        out[socket] = _grid_outputs(value)["Color" if socket == "Color" else "Fac"]
-    return out
-
-
-def grid_names(nodes) -> set[str]:
-    """Names of the grids a shader graph's nodes read (Principled Volume attributes,
-    Attribute nodes, Volume Info outputs)."""
-    names = set()
-    for node in nodes:
-        if node.type == "PRINCIPLED_VOLUME":
-            for key in ("Density Attribute", "Color Attribute"):
-                value = node.inputs.get(key)
-                if isinstance(value, str) and value:
-                    names.add(value)
-        elif node.type == "ATTRIBUTE":
-            names.add(node.props.get("attribute_name", ""))
-        elif node.type == "VOLUME_INFO":
-            names.update(VOLUME_INFO_GRIDS[s] for s in node.props.get("used_outputs", ())
-                         if s in VOLUME_INFO_GRIDS)
-    return names
-
-
 NODE_FUNCTIONS = {
     "VALUE": _value, "RGB": _rgb, "TEX_COORD": _tex_coord, "NEW_GEOMETRY": _geometry,
     "MAPPING": _mapping, "TEX_NOISE": _tex_noise, "TEX_GRADIENT": _tex_gradient,
@@ -430,7 +379,7 @@ NODE_FUNCTIONS = {
     "VALTORGB": _color_ramp, "SEPXYZ": _separate_xyz, "COMBXYZ": _combine_xyz,
     "SEPARATE_COLOR": _separate_color, "COMBINE_COLOR": _combine_color, "INVERT": _invert,
     "GAMMA": _gamma, "MIX": _mix, "MIX_RGB": _mix_rgb,
-    "ATTRIBUTE": _attribute, "VOLUME_INFO": _volume_info,
+    "ATTRIBUTE": attribute_node, "VOLUME_INFO": volume_info_node,
 }
 #: Outputs of position-reading nodes that numpy can evaluate (the rest need Cycles).
 SUPPORTED_OUTPUTS = {"TEX_COORD": {"Generated", "Object"}, "NEW_GEOMETRY": {"Position"}}

@@ -254,3 +254,30 @@ def test_volume_object_extinction_is_density_times_grid_inside_its_region():
     expected = region.intervals(rays.origins.reshape(-1, 3), rays.directions.reshape(-1, 3),
                                 rays.t_near.ravel(), rays.t_far.ravel())
     assert all(np.array_equal(a, b) for a, b in zip((index, t0, t1), expected))
+
+
+def test_attribute_and_volume_info_nodes_read_the_grids():
+    from xsl_render.core.grid_nodes import grid_names
+
+    values = np.zeros((6, 6, 6), np.float32)
+    values[1:5, 1:5, 1:5] = 0.8
+    g = grid(values, origin=(0, 0, 0))
+    nodes = {
+        "attr": Node(type="ATTRIBUTE", name="attr",
+                     props={"attribute_type": "GEOMETRY", "attribute_name": "density",
+                            "used_outputs": ("Fac",)}),
+        "info": Node(type="VOLUME_INFO", name="info", props={"used_outputs": ("Density",)}),
+        "mul": Node(type="MATH", name="mul", props={"operation": "MULTIPLY"},
+                    inputs={"Value": Link("attr", "Fac", "VALUE"), "Value_001": Link("info", "Density", "VALUE")},
+                    input_kinds={"Value": "VALUE", "Value_001": "VALUE"}),
+        "v": Node(type="VOLUME_ABSORPTION", name="v",
+                  inputs={"Density": Link("mul", "Value", "VALUE"), "Color": (0.5, 0.5, 0.5)},
+                  input_kinds={"Density": "VALUE", "Color": "RGBA"}),
+    }
+    graph = ShaderGraph(nodes=nodes, root=Link("v", "Volume", "SHADER"))
+    assert grid_names(nodes.values()) == {"density"}
+    medium = VolumeMedium(key="s#0:0", name="s", kind="volume_object", material="m", graph=graph,
+                          world_to_object=np.eye(4), grids={"density": g},
+                          region=VoxelRegion.from_grids([g], 1e-3, 1, np.eye(4)))
+    centre = (g.index_to_object @ np.array([2.5, 2.5, 2.5, 1.0]))[:3]
+    assert np.allclose(medium.extinction(centre[None]), 0.8 * 0.8 * 0.5)
