@@ -7,7 +7,9 @@ or from camera rays left out) collects, in world space:
   material, which Cycles renders as its default surface);
 * the boundary of each object volume (faces with a volume-only material are not
   surfaces: rays pass through them into the medium);
-* the media themselves (``core.media.VolumeMedium``), the world volume first.
+* the media themselves (``core.media.VolumeMedium``), the world volume first; volume
+  objects with the grids their material reads (``addon.volume_grids``), or the reason
+  Cycles must measure them instead.
 
 A digest of the camera and all this geometry keys the ray cache: if it has not changed,
 the Z buffer and the media intervals on disk are still right, whatever the media's
@@ -22,9 +24,11 @@ import numpy as np
 
 from ..core.camera import CameraModel
 from ..core.media import VolumeMedium, check_densities
-from ..core.shader_graph import ShaderGraph
+from ..core.shader_graph import ShaderGraph, uses_default_coordinates
+from ..core.grid_nodes import grid_names
 from .scene_probe import renderable_instances
 from .shader_export import export_volume_graph, has_surface, has_volume
+from .volume_grids import GridReadError, volume_grids
 
 #: Object types Cycles renders as triangle meshes.
 _MESH_LIKE = ("MESH", "CURVE", "SURFACE", "FONT", "META")
@@ -126,6 +130,7 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
     mesh_cache: dict = {}
     seen: dict[str, int] = {}
     kinds: dict = {}
+    volume_objects: list = []
 
     def kind_of(material) -> tuple[bool, bool]:
         """(stops camera rays, has a volume) of a material, looked up once."""
@@ -146,11 +151,13 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
         if ob.type == "VOLUME":
             for i in volume_slots:
                 material = materials[i]
-                media.append(VolumeMedium(
+                medium = VolumeMedium(
                     key=f"{ob.name}#{count}:{i}", name=ob.name, kind="volume_object",
                     material=material.name, graph=graph_of(material.node_tree, f"mat:{material.name}"),
-                    world_to_object=np.linalg.inv(m),
-                    unsupported="an OpenVDB volume object (its grids are only readable by Cycles)"))
+                    world_to_object=np.linalg.inv(m))
+                volume_objects.append((medium, ob.original, m, len(volume_slots),
+                                       _volume_interpolation(material)))
+                media.append(medium)
             continue
         vertices, triangles, material_index = _mesh_arrays(ob, mesh_cache)
         if not len(triangles):
@@ -179,12 +186,55 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                                   world_to_object=np.linalg.inv(m), texspace=texspace)
             if len(volume_slots) > 1:
                 medium.unsupported = "an object with several volume materials"
+            elif _reads_attributes(medium.graph):
+                medium.unsupported = "attribute or volume info nodes on a mesh volume"
             media.append(medium)
             volumes[key] = _to_world(*_subset(vertices, triangles, boundary), m)
+    # Reading grids adds (and removes) a helper object: only once the walk over the
+    # depsgraph's instances is over, which that would invalidate.
+    for medium, original, matrix, count, interpolation in volume_objects:
+        _attach_grids(medium, scene, original, depsgraph, matrix, count, interpolation)
     for medium in media:
         check_densities(medium)
     geometry = SceneGeometry(surfaces=Triangles.concatenate(surfaces), volumes=volumes)
     return geometry, media
+
+
+def _reads_attributes(graph: ShaderGraph) -> bool:
+    return any(node.type in ("ATTRIBUTE", "VOLUME_INFO") for node in graph.nodes.values())
+
+
+def _volume_interpolation(material) -> str:
+    settings = getattr(material, "cycles", None)
+    return getattr(settings, "volume_interpolation", "LINEAR")
+
+
+def _attach_grids(medium: VolumeMedium, scene, ob, depsgraph, object_to_world,
+                  volume_materials: int, interpolation: str) -> None:
+    """Give a volume object's medium the grids its material reads and the region Cycles
+    renders, or the reason it must go to Cycles instead."""
+    graph = medium.graph
+    if graph.unsupported is not None:
+        return
+    if volume_materials > 1:
+        medium.unsupported = "a volume object with several volume materials"
+        return
+    if any(node.type == "TEX_COORD" and "Generated" in node.props.get("used_outputs", ())
+           or uses_default_coordinates(node) for node in graph.nodes.values()):
+        medium.unsupported = "generated texture coordinates on a volume object"
+        return
+    names = grid_names(graph.nodes.values())
+    try:
+        grids, region = volume_grids(scene, ob, depsgraph, names, object_to_world, interpolation)
+    except GridReadError as error:
+        medium.unsupported = f"an OpenVDB volume object whose grids numpy cannot read: {error}"
+        return
+    missing = sorted(name for node in graph.nodes.values() if node.type in ("ATTRIBUTE", "VOLUME_INFO")
+                     for name in grid_names([node]) if name not in grids)
+    if missing:
+        medium.unsupported = f"volume object reads grids it does not have ({', '.join(missing)})"
+        return
+    medium.grids, medium.region = grids, region
 
 
 def geometry_digest(camera: CameraModel, geometry: SceneGeometry) -> str:

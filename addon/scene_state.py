@@ -111,9 +111,15 @@ class SceneState:
         self.scene = scene
         self._kept: set = set()
 
-    def swap_material(self, ob, slot_index: int, material) -> None:
-        """Put ``material`` into a slot for the duration of the block (the original returns)."""
-        ob.material_slots[slot_index].material = material
+    def swap_material(self, ob, slot_index: int, material, link: str | None = None) -> None:
+        """Put ``material`` into a slot for the duration of the block (the original returns).
+
+        ``link="OBJECT"`` makes the slot override whatever material the evaluated geometry
+        carries (a geometry-nodes Set Material, say), which a data slot would not."""
+        slot = ob.material_slots[slot_index]
+        if link is not None and slot.link != link:
+            slot.link = link
+        slot.material = material
 
     def keep(self, datablock) -> None:
         """Do not remove this datablock at the end (e.g. an image shown to the artist)."""

@@ -31,6 +31,7 @@ _PROPS = {
     "SEPARATE_COLOR": ("mode",),
     "COMBINE_COLOR": ("mode",),
     "TEX_COORD": ("from_instancer",),
+    "ATTRIBUTE": ("attribute_type", "attribute_name"),
 }
 
 

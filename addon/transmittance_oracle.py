@@ -1,4 +1,5 @@
-"""Cycles measures the transmittance itself: the truth for tests, the fallback for smoke.
+"""Cycles measures the transmittance itself: the truth for tests, and the fallback for
+media numpy cannot evaluate.
 
 The scene is rendered with every surface emitting exactly 1 (white) and nothing else
 lighting anything: lamps hidden, world surface black, no bounces. Each volume shader is
@@ -11,7 +12,10 @@ of a pixel go through its centre, like the X map's rays (Blackman-Harris: Cycles
 filter ignores the width and spreads samples over the whole pixel).
 
 Nothing of the user's is edited: materials, node groups and the world are copied, the
-copies assigned for the render (``addon.scene_state``), and everything is put back.
+copies assigned for the render (``addon.scene_state``), and everything is put back. The
+copies go into object-linked slots: a material that geometry nodes set on the evaluated
+geometry (Set Material) is what Cycles renders there, and only an object's own slot
+overrides it.
 """
 from __future__ import annotations
 
@@ -34,7 +38,7 @@ ORACLE_STEP_RATE = 0.05
 
 def render_transmittance(scene, include: list[VolumeMedium] | None = None, samples: int = 16,
                          scale: float = 1.0, step_rate: float = ORACLE_STEP_RATE,
-                         sky: float = 0.0) -> tuple[np.ndarray, float]:
+                         sky: float = 0.0, resize: bool = True) -> tuple[np.ndarray, float]:
     """Render exp(-tau) per channel for the whole frame: (H, W, 3) float32, row 0 on top.
 
     Parameters
@@ -46,8 +50,9 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
     samples : int
         Cycles samples per pixel (absorption-only media converge fast).
     scale : float
-        Render at this fraction of the resolution and resize to full size (the cheap
-        fallback for volumes numpy cannot evaluate).
+        Render at this fraction of the resolution (the cheap fallback for volumes numpy
+        cannot evaluate) and, with ``resize``, interpolate to full size; without, the
+        low-resolution render is returned (``core.guided_upsample`` does better at edges).
     step_rate : float
         Cycles' volume step rate. The oracle ray-marches (Cycles' "biased" volume mode):
         with an absorbing medium each sample is then a deterministic quadrature of the
@@ -69,7 +74,7 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
         passes = render_passes(scene, ("Combined",))
     rgb = passes["Combined"][:, :, :3]
     height, width = _full_size(scene)
-    if rgb.shape[:2] != (height, width):
+    if resize and rgb.shape[:2] != (height, width):
         from skimage.transform import resize
 
         rgb = resize(rgb, (height, width, 3), order=1, mode="edge", anti_aliasing=False)
@@ -101,9 +106,14 @@ def oracle_scene(scene, include: list[VolumeMedium] | None = None, samples: int 
                 add_slot(ob.data, factory.emission())
                 continue
             grids = _grid_names(ob, depsgraph)
+            rendered = _rendered_materials(ob, depsgraph)
             for index, slot in enumerate(ob.material_slots):
                 keep = keep_slots is None or (ob.name, index) in keep_slots
-                state.swap_material(ob, index, factory.copy(slot.material, keep, grids))
+                # The copy replaces what Cycles renders in this slot: the evaluated
+                # geometry's material (geometry nodes may set it) unless the slot is the
+                # object's own; an object-linked copy overrides either.
+                material = rendered.get(index, slot.material)
+                state.swap_material(ob, index, factory.copy(material, keep, grids), link="OBJECT")
         scene.world = factory.world(scene.world, keep_world, sky)
         yield scene
 
@@ -122,6 +132,12 @@ def _full_size(scene) -> tuple[int, int]:
 
     width, height = render_size(scene)
     return height, width
+
+
+def _rendered_materials(ob, depsgraph) -> dict:
+    """Material per slot index of the evaluated object (what Cycles renders)."""
+    evaluated = ob.evaluated_get(depsgraph)
+    return {index: slot.material for index, slot in enumerate(evaluated.material_slots)}
 
 
 def _grid_names(ob, depsgraph) -> frozenset:

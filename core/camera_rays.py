@@ -75,6 +75,53 @@ class CameraRays:
         return out
 
 
+@dataclass(frozen=True)
+class RayModel:
+    """The rays of a camera at any, also fractional or outside, pixel position of a window.
+
+    For perspective and orthographic cameras both the ray origin and the direction scaled
+    to unit length along the view axis are affine functions of the pixel coordinates, so
+    three coefficients each (value at pixel (0, 0), change per column, change per row)
+    give every ray. Rows and columns count from the window's top-left pixel centre.
+    """
+
+    origin: np.ndarray      # (3, 3): value, d/dcol, d/drow
+    plane: np.ndarray       # (3, 3): direction / (direction . view axis), same layout
+
+    def rays(self, rows, cols) -> tuple[np.ndarray, np.ndarray]:
+        """Origins and unit directions (N, 3) at pixel positions ``rows``, ``cols`` (N,)."""
+        rows = np.asarray(rows, dtype=np.float64)[:, None]
+        cols = np.asarray(cols, dtype=np.float64)[:, None]
+        origins = self.origin[0] + cols * self.origin[1] + rows * self.origin[2]
+        plane = self.plane[0] + cols * self.plane[1] + rows * self.plane[2]
+        return origins, plane / np.linalg.norm(plane, axis=1, keepdims=True)
+
+
+def fit_ray_model(rays: CameraRays) -> RayModel | None:
+    """The affine :class:`RayModel` of ``rays``, or None when the rays are not such a grid
+    (a window narrower than 2 pixels, or rays picked from here and there)."""
+    height, width = rays.shape
+    if height < 2 or width < 2:
+        return None
+    cos = rays.directions @ np.asarray(rays.view_axis, dtype=np.float64)
+    if not np.all(cos > 1e-9):
+        return None
+    plane = rays.directions / cos[..., None]
+
+    def affine(field):
+        return np.stack([field[0, 0], (field[0, -1] - field[0, 0]) / (width - 1),
+                         (field[-1, 0] - field[0, 0]) / (height - 1)])
+
+    model = RayModel(origin=affine(rays.origins), plane=affine(plane))
+    rows, cols = np.divmod(np.arange(rays.count), width)
+    origins, directions = model.rays(rows, cols)
+    scale = max(1.0, float(np.abs(rays.origins).max()))
+    if (np.abs(origins - rays.origins.reshape(-1, 3)).max() > 1e-7 * scale
+            or np.abs(directions - rays.directions.reshape(-1, 3)).max() > 1e-7):
+        return None
+    return model
+
+
 def planar_depth(distance: np.ndarray, directions: np.ndarray, view_axis: np.ndarray) -> np.ndarray:
     """Distance along rays -> depth along the view axis (Cycles' Depth pass)."""
     return distance * (directions @ np.asarray(view_axis, dtype=np.float64))

@@ -23,7 +23,10 @@ class VolumeMedium:
 
     ``key`` identifies the instance across runs (the ray cache stores its intervals under
     it); ``kind`` is "world", "mesh" or "volume_object". ``world_to_object`` and
-    ``texspace`` place the object's coordinate systems for texture lookups.
+    ``texspace`` place the object's coordinate systems for texture lookups. A volume
+    object carries the grids its material reads (``grids``) and the region where Cycles
+    renders it (``region``, a ``core.voxel_grid.VoxelRegion``): its extinction is 0
+    outside that region, and its ray intervals are found there, not in the ray cache.
     """
 
     key: str
@@ -34,6 +37,8 @@ class VolumeMedium:
     world_to_object: np.ndarray | None = None
     texspace: tuple[tuple, tuple] | None = None
     unsupported: str | None = None          # set when only Cycles can evaluate it
+    grids: dict | None = None
+    region: object | None = None
     extra: dict = field(default_factory=dict)
 
     @property
@@ -46,17 +51,22 @@ class VolumeMedium:
 
     def context(self, points: np.ndarray) -> NodeContext:
         return NodeContext(points=np.asarray(points, dtype=np.float64),
-                           world_to_object=self.world_to_object, texspace=self.texspace)
+                           world_to_object=self.world_to_object, texspace=self.texspace,
+                           grids=self.grids)
 
     def constant_extinction(self) -> np.ndarray | None:
-        """The extinction (3,) when it is the same everywhere, else None."""
-        if not self.evaluable or self.graph.depends_on_position():
+        """The extinction (3,) when it is the same everywhere, else None (always for a
+        volume object: it ends where its voxels do)."""
+        if not self.evaluable or self.kind == "volume_object" or self.graph.depends_on_position():
             return None
         return evaluate_extinction(self.graph, self.context(np.zeros((1, 3))))[0].astype(np.float64)
 
     def extinction(self, points: np.ndarray) -> np.ndarray:
         """Extinction (N, 3) at world-space points."""
-        return evaluate_extinction(self.graph, self.context(points))
+        extinction = evaluate_extinction(self.graph, self.context(points))
+        if self.region is not None:
+            extinction = extinction * self.region.contains(points)[:, None]
+        return extinction
 
     def describe(self) -> dict:
         constant = self.constant_extinction() if self.evaluable else None

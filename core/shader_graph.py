@@ -66,11 +66,11 @@ class ShaderGraph:
 
     def depends_on_position(self) -> bool:
         """True when some reachable node reads coordinates (textures, positions)."""
-        return any(node.type in POSITION_NODES or _uses_default_coordinates(node)
+        return any(node.type in POSITION_NODES or uses_default_coordinates(node)
                    for node in self.nodes.values())
 
 
-def _uses_default_coordinates(node: Node) -> bool:
+def uses_default_coordinates(node: Node) -> bool:
     # Texture nodes with an unlinked Vector input read the Generated coordinates.
     return node.type.startswith("TEX_") and not isinstance(node.inputs.get("Vector"), Link)
 
@@ -175,6 +175,15 @@ def closure_extinction_field(ev: GraphEvaluator, node: Node, weight) -> np.ndarr
         return weight[..., None] * (absorption + scatter)
     density = weight * np.maximum(np.nan_to_num(ev.input(node, "Density", 1.0)), 0.0)
     color = ev.input(node, "Color", (1.0, 1.0, 1.0))
+    if node.type == "PRINCIPLED_VOLUME":
+        # On a volume object the grids named by the attribute sockets scale density and
+        # colour (``svm_node_principled_volume``); elsewhere nothing has those names.
+        grid = ev.context.grid(node.inputs.get("Density Attribute"))
+        if grid is not None:
+            density = np.maximum(density * (grid if grid.ndim == 1 else grid.mean(axis=1)), 0.0)
+        tint = ev.context.grid(node.inputs.get("Color Attribute"))
+        if tint is not None:
+            color = color * (tint[:, None] if tint.ndim == 1 else tint)
     if node.type == "VOLUME_SCATTER":
         return density[..., None] * color
     if node.type == "VOLUME_ABSORPTION":

@@ -8,17 +8,18 @@ the order of operations included), so an evaluated density is the one Cycles ren
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import cycles_noise
+from .grid_nodes import attribute_node, volume_info_node
 from .shader_math import (BLEND_MODES, MATH_OPERATIONS, blend_colors, math_op, safe_divide,
                           safe_pow, sign)
 
 F32 = np.float32
 #: Nodes whose outputs depend on where they are evaluated.
-POSITION_NODES = ("TEX_COORD", "NEW_GEOMETRY")
+POSITION_NODES = ("TEX_COORD", "NEW_GEOMETRY", "ATTRIBUTE", "VOLUME_INFO")
 
 
 @dataclass
@@ -28,12 +29,27 @@ class NodeContext:
     ``points`` are world-space positions (N, 3). ``world_to_object`` is the inverse world
     matrix of the object owning the volume (None for the world volume, whose Object and
     Generated coordinates are world positions, as in Cycles). ``texspace`` is the mesh's
-    texture space (location, size) for Generated coordinates.
+    texture space (location, size) for Generated coordinates. ``grids`` are the voxel
+    grids of a volume object by name (``core.voxel_grid.VoxelGrid``), read by the Principled
+    Volume's attributes, Attribute and Volume Info nodes.
     """
 
     points: np.ndarray
     world_to_object: np.ndarray | None = None
     texspace: tuple[tuple, tuple] | None = None
+    grids: dict | None = None
+    _grid_values: dict = field(default_factory=dict)
+
+    def grid(self, name: str):
+        """The grid ``name`` at the points ((N,) or (N, 3)), or None when there is none."""
+        if not self.grids or not name or name not in self.grids:
+            return None
+        if name not in self._grid_values:
+            local = self.points if self.world_to_object is None else (
+                self.points @ np.asarray(self.world_to_object)[:3, :3].T
+                + np.asarray(self.world_to_object)[:3, 3])
+            self._grid_values[name] = self.grids[name].sample(local).astype(F32)
+        return self._grid_values[name]
 
 
 def _transform(matrix, points):
@@ -363,6 +379,7 @@ NODE_FUNCTIONS = {
     "VALTORGB": _color_ramp, "SEPXYZ": _separate_xyz, "COMBXYZ": _combine_xyz,
     "SEPARATE_COLOR": _separate_color, "COMBINE_COLOR": _combine_color, "INVERT": _invert,
     "GAMMA": _gamma, "MIX": _mix, "MIX_RGB": _mix_rgb,
+    "ATTRIBUTE": attribute_node, "VOLUME_INFO": volume_info_node,
 }
 #: Outputs of position-reading nodes that numpy can evaluate (the rest need Cycles).
 SUPPORTED_OUTPUTS = {"TEX_COORD": {"Generated", "Object"}, "NEW_GEOMETRY": {"Position"}}
@@ -387,6 +404,8 @@ def unsupported_reason(node_type: str, props: dict, used_outputs: set[str]) -> s
             return f"{node_type.lower()} {props.get(key, '').lower()}"
     if node_type in ("SEPARATE_COLOR", "COMBINE_COLOR") and props.get("mode", "RGB") != "RGB":
         return f"{node_type.lower()} in {props.get('mode')} mode"
+    if node_type == "ATTRIBUTE" and props.get("attribute_type", "GEOMETRY") != "GEOMETRY":
+        return f"attribute node of type {str(props.get('attribute_type')).lower()}"
     if node_type == "MIX" and props.get("data_type") not in ("FLOAT", "VECTOR", "RGBA"):
         return f"mix of {str(props.get('data_type')).lower()}"
     if props.get("from_instancer"):

@@ -16,7 +16,7 @@ import numpy as np
 
 from .camera_rays import CameraRays
 from .media import VolumeMedium
-from .transmittance import DEFAULT_SAMPLES, optical_depth
+from .transmittance import DEFAULT_SAMPLES, DEFAULT_TOLERANCE, optical_depth
 
 #: Rec. 709 weights (linear sRGB, Blender's default scene-linear space).
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -48,6 +48,7 @@ def apply_minbound(x: np.ndarray, sky: np.ndarray) -> tuple[np.ndarray, float | 
 
 def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound: bool = True,
                            extra_tau: np.ndarray | None = None, samples: int = DEFAULT_SAMPLES,
+                           tolerance: float | None = DEFAULT_TOLERANCE,
                            ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The X map of ``media`` seen along already cast ``rays``: no ray is cast here.
 
@@ -65,7 +66,11 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
         Optical depth measured elsewhere (Cycles' transmittance of the media numpy cannot
         evaluate), added to what is integrated here.
     samples : int
-        Midpoint samples per interval for heterogeneous media.
+        Midpoint samples per interval for heterogeneous media when every ray is marched
+        (``tolerance`` None).
+    tolerance : float or None
+        Transmittance tolerance of the adaptive ray grid that integrates heterogeneous
+        media (``core.ray_grid_depth``); None marches every ray instead (slow; a reference).
 
     Returns
     -------
@@ -88,7 +93,8 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
         # MinBound overwrites every sky pixel: integrating those rays (often the longest,
         # out to the clip end) would be wasted work.
         only = rays.hit if (minbound and rays.hit.any()) else None
-        tau, info["media"] = optical_depth(rays, [m for m in media if m.evaluable], samples, only)
+        tau, info["media"] = optical_depth(rays, [m for m in media if m.evaluable], samples, only,
+                                           tolerance)
         if extra_tau is not None:
             tau = tau + extra_tau
     transmittance = np.exp(-tau).astype(np.float32)

@@ -141,3 +141,14 @@ def test_scene_is_unchanged_after_compute(blender):
     compute_x_map(scene)
     assert settings_dump(scene) == before
     assert math.isclose(scene.camera.data.lens, 24.0)
+
+
+@pytest.mark.parametrize("options, message", [
+    (("--tolerance", "2"), "--tolerance"),
+    (("--tolerance", "0"), "--tolerance"),
+    (("--samples", "16", "--tolerance", "0.01"), "exclude each other"),
+])
+def test_bad_integration_options_are_refused(cli, tmp_path, options, message):
+    result = cli("xmap", tmp_path / "missing.blend", "--out", tmp_path, *options)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and message in lines[0]

@@ -86,28 +86,116 @@ def test_nested_and_overlapping_mesh_volumes(blender):
     _compare_z(scene, z)
 
 
-def test_noise_driven_density_with_camera_inside(blender):
+def test_noise_driven_density_with_camera_inside_and_recomputed_from_cache(blender, tmp_path):
+    from xsl_render.addon.xmap import compute_x_map
+
     scene = base_scene(blender)
     ground_and_props(blender)
-    fog = add(blender, "primitive_cube_add", noise_fog_material(blender), size=30, location=(0, 5, 0))
+    material = noise_fog_material(blender)
+    fog = add(blender, "primitive_cube_add", material, size=30, location=(0, 5, 0))
     fog.scale = (1.0, 1.0, 0.3)          # 30 x 30 x 9 around the camera: it sees from inside
-    x, z, info = _compare_x(scene)
+    x, z, info = _compare_x(scene, cache_dir=tmp_path)
     (medium,) = info["media"]
     assert medium["evaluated_by"] == "numpy" and not medium["homogeneous"]
+    assert info["integration"][0]["method"].startswith("adaptive ray grid")
     assert 0.05 < x[np.isfinite(z)].mean() < 0.6       # the fog is neither absent nor opaque
+    # A thinner fog: X from the cached rays, still what Cycles renders.
+    multiply = next(n for n in material.node_tree.nodes if n.type == "MATH")
+    multiply.inputs[1].default_value = 0.25
+    thinner, _, info = _compare_x(scene, cache_dir=tmp_path)
+    assert info["cache"]["hit"] and info["seconds"]["rays"] < 0.1
+    assert (thinner - x)[np.isfinite(z)].mean() > 0.05
 
 
-def test_volume_object_goes_through_cycles(blender):
+def test_noise_driven_world_fog(blender):
+    scene = base_scene(blender)
+    ground_and_props(blender)
+    tree = scene.world.node_tree
+    fog = world_fog(scene, density=1.0)
+    coords, noise, scale = (tree.nodes.new(t) for t in ("ShaderNodeTexCoord", "ShaderNodeTexNoise",
+                                                        "ShaderNodeMath"))
+    noise.inputs["Scale"].default_value = 0.3
+    noise.inputs["Detail"].default_value = 4.0
+    scale.operation = "MULTIPLY"
+    scale.inputs[1].default_value = 0.12
+    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    tree.links.new(noise.outputs["Fac"], scale.inputs[0])
+    tree.links.new(scale.outputs[0], fog.inputs["Density"])
+    x, z, info = _compare_x(scene)
+    assert info["integration"][0]["method"].startswith("adaptive ray grid")
+    assert x[np.isfinite(z)].min() < 0.5
+
+
+@pytest.mark.parametrize("material_by_nodes, interpolation", [(False, "LINEAR"), (True, "CUBIC")])
+def test_volume_object_grids_are_read_without_a_cycles_render(blender, monkeypatch,
+                                                              material_by_nodes, interpolation):
+    from xsl_render.addon import xmap
+    from xsl_render.addon.scene_state import settings_dump
+    from xsl_render.core.transmittance import transmittance_along_rays
+    from xsl_render.core.xmap import luminance
+
+    def no_render(*args, **kwargs):
+        raise AssertionError("the X map rendered the volume object with Cycles")
+
+    monkeypatch.setattr(xmap, "_oracle_transmittance", no_render)
     scene = base_scene(blender)
     ground_and_props(blender)
     world_fog(scene, density=0.02)
-    smoke_volume_object(blender, scene)
+    smoke = smoke_volume_object(blender, scene, material_by_nodes=material_by_nodes,
+                                interpolation=interpolation)
+    smoke.rotation_euler = (0.3, 0.0, 0.6)              # the grid's transform matters
+    smoke.scale = (1.2, 0.8, 1.0)
+    before = settings_dump(scene)
+    counts = {name: len(getattr(blender.data, name)) for name in ("objects", "meshes", "node_groups")}
     x, z, info = _compare_x(scene, step_rate=0.25)
+    assert settings_dump(scene) == before
+    assert {name: len(getattr(blender.data, name)) for name in counts} == counts
     by_name = {m["name"]: m for m in info["media"]}
-    assert by_name["smoke"]["evaluated_by"] == "cycles"
-    assert by_name["World"]["evaluated_by"] == "numpy"
-    assert info["cycles_fallback"]["media"] == ["smoke#0:0"]
+    assert by_name["smoke"]["evaluated_by"] == "numpy" and info["cycles_fallback"] is None
     assert x[np.isfinite(z)].min() < 0.1                # the smoke is really there
+    # The light map's rays (marched one by one) see the same smoke. (Twice on one
+    # depsgraph: reading grids must leave it walkable.)
+    depsgraph = blender.context.evaluated_depsgraph_get()
+    xmap.compute_x_map_detailed(scene, minbound=False, depsgraph=depsgraph)
+    result = xmap.compute_x_map_detailed(scene, minbound=False, depsgraph=depsgraph)
+    pixels = np.flatnonzero(result.rays.hit)[::7]
+    along = luminance(transmittance_along_rays(result.rays, result.media, pixels,
+                                               np.full(len(pixels), np.inf)))
+    assert np.abs(along - result.x.ravel()[pixels]).max() < 0.03
+
+
+def test_unsupported_density_goes_to_the_cycles_fallback(blender):
+    """A density numpy cannot evaluate (a Voronoi texture) is measured by a cheap Cycles
+    render (few samples; at half resolution brought back to full size along the rays'
+    path lengths) and still agrees with the full oracle."""
+    from xsl_render.addon.transmittance_oracle import render_transmittance
+    from xsl_render.addon.xmap import compute_x_map
+    from xsl_render.core.xmap import luminance
+
+    scene = base_scene(blender, width=96, height=54)
+    ground_and_props(blender)
+    world_fog(scene, density=0.02)
+    material, node = volume_material(blender, "cells", "ShaderNodeVolumeScatter", density=1.0,
+                                     color=(0.8, 0.8, 0.8, 1.0))
+    tree = material.node_tree
+    voronoi, scale = tree.nodes.new("ShaderNodeTexVoronoi"), tree.nodes.new("ShaderNodeMath")
+    voronoi.inputs["Scale"].default_value = 0.8
+    scale.operation = "MULTIPLY"
+    scale.inputs[1].default_value = 0.5
+    tree.links.new(voronoi.outputs["Distance"], scale.inputs[0])
+    tree.links.new(scale.outputs[0], node.inputs["Density"])
+    cells = add(blender, "primitive_cube_add", material, size=5, location=(0.5, 8, 1.5))
+    truth, _ = render_transmittance(scene, samples=16, step_rate=0.05)
+    for oracle_scale in (None, 0.5):
+        x, z, info = compute_x_map(scene, minbound=False, oracle_scale=oracle_scale)
+        mae, p99 = agreement(x, luminance(truth), np.isfinite(z))
+        assert mae <= 0.01 and p99 <= 0.05, f"X vs Cycles: MAE {mae:.5f}, p99 {p99:.5f}"
+        by_name = {m["name"]: m for m in info["media"]}
+        assert by_name[cells.name]["evaluated_by"] == "cycles"
+        assert by_name["World"]["evaluated_by"] == "numpy"
+        assert info["cycles_fallback"]["media"] == [f"{cells.name}#0:0"]
+        assert info["cycles_fallback"]["scale"] == (oracle_scale or 1.0)
+    assert x[np.isfinite(z)].min() < 0.6
 
 
 def test_orthographic_shift_sensor_fit_and_border(blender):

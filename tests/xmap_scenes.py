@@ -109,9 +109,11 @@ def noise_fog_material(bpy, name="noise fog"):
     return material
 
 
-def smoke_volume_object(bpy, scene, density=2.0):
+def smoke_volume_object(bpy, scene, density=2.0, material_by_nodes=False, interpolation="LINEAR"):
     """An OpenVDB volume made by geometry nodes (a noise-valued 'density' grid), rendered
-    with a Principled Volume reading that grid, linked to the object's slot."""
+    with a Principled Volume reading that grid. The material is linked to the object's
+    slot, or (``material_by_nodes``) set on the grid by a Set Material node, as the
+    statue example scene does; ``interpolation`` is the material's volume interpolation."""
     volume = bpy.data.volumes.new("smoke")
     ob = bpy.data.objects.new("smoke", volume)
     scene.collection.objects.link(ob)
@@ -130,13 +132,21 @@ def smoke_volume_object(bpy, scene, density=2.0):
     cube.inputs["Max"].default_value = (2.0, 2.0, 1.5)
     for axis in "XYZ":
         cube.inputs[f"Resolution {axis}"].default_value = 24
-    tree.links.new(cube.outputs[0], group_output.inputs[0])
-    ob.modifiers.new("grid", "NODES").node_group = tree
     material, _ = volume_material(bpy, "smoke", "ShaderNodeVolumePrincipled", density=density,
                                   color=(0.5, 0.5, 0.5, 1.0))
-    volume.materials.append(None)
-    ob.material_slots[0].link = "OBJECT"        # geometry nodes output carries no material
-    ob.material_slots[0].material = material
+    material.cycles.volume_interpolation = interpolation
+    if material_by_nodes:
+        set_material = tree.nodes.new("GeometryNodeSetMaterial")
+        set_material.inputs["Material"].default_value = material
+        tree.links.new(cube.outputs[0], set_material.inputs["Geometry"])
+        tree.links.new(set_material.outputs[0], group_output.inputs[0])
+        volume.materials.append(material)
+    else:
+        tree.links.new(cube.outputs[0], group_output.inputs[0])
+        volume.materials.append(None)
+        ob.material_slots[0].link = "OBJECT"    # geometry nodes output carries no material
+        ob.material_slots[0].material = material
+    ob.modifiers.new("grid", "NODES").node_group = tree
     return ob
 
 
