@@ -23,7 +23,7 @@ from ..core.map_options import MapOptions
 from ..core.render_options import RenderOptions
 from ..core.validation_compare import compare_with_gold
 from ..core.validation_plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
-                                    map_seconds, scene_variants)
+                                    map_seconds, scaled_size, scene_variants)
 from ..core.validation_results import scene_summary
 from ..core.validation_store import file_sha256, inputs_hash, read_record, write_record
 from ..core.vdp import vdp_unavailable_reason
@@ -36,10 +36,20 @@ STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "ada
 
 @dataclass(frozen=True)
 class SceneJob:
-    """A scene to validate: the name it is reported under and its .blend file."""
+    """A scene to validate.
+
+    ``name`` names its folder and its section of the report; ``max_spp`` overrides the
+    settings' ceiling for this scene (one .blend can be validated at two ceilings under two
+    names); ``compare_minbound`` also renders XSL without MinBound (the paper's road scene).
+    """
 
     name: str
     path: Path
+    max_spp: int | None = None
+    compare_minbound: bool = False
+
+    def variants(self, settings: ValidationSettings) -> list[Variant]:
+        return scene_variants(settings.variants, self.compare_minbound)
 
 
 class _Steps:
@@ -53,12 +63,16 @@ class _Steps:
         self.done = 0.0
         self.index = 0
 
-    def sub(self, label: str) -> Progress:
+    def sub(self, label: str, echo: str = "") -> Progress:
+        """A callback for the current step; ``echo`` is a prefix of the step's own messages
+        that the label already says (the render functions start theirs with the mode)."""
         start, weight = self.done, self.weights[self.index]
 
         def report(fraction: float, message: str):
             if self.callback is None:
                 return False
+            if echo and message.startswith(echo):
+                message = message[len(echo):]
             return self.callback((start + weight * min(1.0, max(0.0, fraction))) / self.total,
                                  f"{label}: {message}")
         return report
@@ -73,11 +87,13 @@ class _Steps:
 
 
 def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[float]:
+    """The steps' weights, in plan order; a render costs in proportion to its ceiling."""
     weights = []
     for job in jobs:
-        variants = scene_variants(job.name, settings.variants, settings.minbound_scenes)
+        variants = job.variants(settings)
+        ceiling = (job.max_spp or settings.max_spp) / settings.max_spp
         weights += [STEP_WEIGHTS["maps"]] * len({v.map_options.minbound for v in variants if v.map_options})
-        weights += [STEP_WEIGHTS[v.kind] for v in variants]
+        weights += [STEP_WEIGHTS[v.kind] * ceiling for v in variants]
         weights += [STEP_WEIGHTS["metrics"]] * (len(variants) - 1)
     return weights
 
@@ -92,7 +108,6 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
     import bpy  # noqa: F401  (the session the scenes are opened in)
 
     out_dir = Path(out_dir)
-    options = settings.render_options()
     vdp_reason = None if settings.vdp else "not requested (--no-vdp)"
     if vdp_reason is None:
         vdp_reason = vdp_unavailable_reason()
@@ -101,6 +116,7 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
                "scenes": {}, "rendered": 0, "reused": 0}
     steps = _Steps(progress, plan_weights(jobs, settings))
     for job in jobs:
+        options = settings.render_options(job.max_spp)
         results["scenes"][job.name] = _SceneRun(job, settings, options, out_dir, steps, results).run()
         write_json(out_dir / "results.json", results)
     return results
@@ -141,8 +157,8 @@ class _SceneRun:
     # -- the scene ------------------------------------------------------------------------
     def run(self) -> dict:
         self.sha256 = file_sha256(self.job.path)
-        self.size = self.settings.resolution or self.scene_size()
-        variants = scene_variants(self.job.name, self.settings.variants, self.settings.minbound_scenes)
+        self.size = self.settings.resolution or scaled_size(self.scene_size(), self.settings.longest_side)
+        variants = self.job.variants(self.settings)
         for minbound in dict.fromkeys(v.map_options.minbound for v in variants if v.map_options):
             self.maps[minbound] = self.director_maps(minbound)
         for variant in variants:
@@ -150,7 +166,7 @@ class _SceneRun:
         for variant in variants:
             if variant.name != GOLD:
                 self.compare(variant)
-        return scene_summary(self.job, self.sha256, self.size, self.settings, variants, self.records,
+        return scene_summary(self.job, self.sha256, self.size, self.options, variants, self.records,
                              {mb: info for mb, (_, _, info, _) in self.maps.items()}, self.warnings,
                              self.reused)
 
@@ -226,7 +242,7 @@ class _SceneRun:
             self.steps.finish()
             return record
         options = RenderOptions(**{**self.options.to_dict(), "resolution": tuple(self.size)}).check()
-        scene, progress = self.open_scene(), self.steps.sub(label)
+        scene, progress = self.open_scene(), self.steps.sub(label, echo=f"{variant.kind}: ")
         if variant.kind == "gold":
             outcome = sr.render_gold(scene, options, progress=progress)
         elif variant.kind == "selective":

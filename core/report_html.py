@@ -43,7 +43,6 @@ tr.gold td{background:#f3f3f3}tr.equal td{background:#f6f1fa}
 .maps{grid-template-columns:repeat(5,1fr)}
 .pair{grid-template-columns:1fr 1fr}
 .crops{grid-template-columns:repeat(5,1fr)}
-.runs{grid-template-columns:1.1fr repeat(5,1fr)}
 figure{margin:0}figcaption{font-size:12px;color:#444;margin-top:2px}
 img{width:100%;display:block;background:#000}
 img.zoom{image-rendering:pixelated}
@@ -64,11 +63,11 @@ def build_report(results: dict, out_dir: Path) -> str:
     scenes = results.get("scenes", {})
     settings = results.get("settings", {})
     vdp = results.get("vdp", {})
-    resolution = settings.get("resolution")
-    head = (f"<p class=meta>Ceiling {settings.get('max_spp')} samples per pixel, "
-            f"{'%dx%d' % tuple(resolution) if resolution else 'each scene at its own resolution'}, "
-            f"seed {settings.get('seed')}. Times as in the paper's Fig. 8: a selective render's "
-            "time includes making its maps. Equal-time baselines get the wall time of the XSL run.</p>")
+    ceilings = sorted({scene.get("max_spp") for scene in scenes.values()} - {None})
+    head = (f"<p class=meta>Ceiling {' and '.join(map(str, ceilings)) or '-'} samples per pixel "
+            f"(the gold standard's count everywhere), Cycles seed {settings.get('seed')}. "
+            "Times as in the paper's Fig. 8: a selective render's time includes making the maps it "
+            "uses. The equal-time baselines get the wall time of the XSL run, maps included.</p>")
     vdp_line = ("VDP: ColorVideoVDP, probability of detection per pixel." if vdp.get("ran")
                 else f"VDP skipped: {escape(str(vdp.get('skipped')))}")
     body = [
@@ -217,7 +216,7 @@ def _scene_section(scene_name: str, scene: dict, out_dir: Path) -> str:
     parts.append(_img(display_dir / "gold.png", runs["gold"]["label"], overlay=overlay))
     if shown:
         parts.append(_img(display_dir / f"{shown}.png", f"{runs[shown]['label']}: "
-                          f"{_speedup(runs[shown]).replace('&times;', 'x')} faster", overlay=overlay))
+                          f"{_speedup(runs[shown]).replace('&times;', 'x')} the speed of the gold standard", overlay=overlay))
     parts.append("</div>")
     parts.append(f"<h3>Around the lights <span class=note>(crop: {escape(where)}; "
                  "magnified, pixels kept sharp)</span></h3><div class='grid crops'>")
@@ -232,16 +231,21 @@ def _scene_section(scene_name: str, scene: dict, out_dir: Path) -> str:
 
     parts.append("<h3>Every run against the gold standard <span class=note>(samples per pixel: "
                  "white = ceiling; heatmaps: magma, bright = large difference, error-pixel "
-                 "threshold at the same colour for MSE and FLIP)</span></h3><div class='grid runs'>")
+                 "threshold at the same colour for MSE and FLIP)</span></h3>")
+    heatmaps = [m for m in ("flip", "mse", "vdp")
+                if any(run.get("heatmaps", {}).get(m) for run in runs.values())]
+    parts.append(f"<div class='grid runs' style='grid-template-columns:1.1fr repeat({2 + len(heatmaps)},1fr)'>")
     parts += ["<div></div>", "<div class=note>image</div>", "<div class=note>samples per pixel</div>"]
-    parts += [f"<div class=note>{label} difference</div>" for _, label in (("flip", "FLIP"), ("mse", "MSE"), ("vdp", "VDP"))]
+    parts += [f"<div class=note>{m.upper()} difference</div>" for m in heatmaps]
     for name, run in runs.items():
         parts.append(f"<div class=name>{escape(run.get('label', name))}</div>")
         parts.append(_img(display_dir / f"{name}.png", f"{run['time_s']:.2f} s"))
         parts.append(_img(out_dir / run["files"]["spp_png"], f"mean {run['stats'].get('mean_spp', 0):.2f} spp"))
-        for metric in ("flip", "mse", "vdp"):
+        for metric in heatmaps:
             parts.append(_heatmap_cell(run, metric, out_dir, name == "gold"))
     parts.append("</div>")
+    if "vdp" not in heatmaps:
+        parts.append("<p class=note>No VDP heatmaps: VDP did not run (see the top of the report).</p>")
     return "".join(parts)
 
 

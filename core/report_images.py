@@ -18,8 +18,9 @@ from .tonemap import luminance, standard_view
 
 Box = tuple[int, int, int, int]     # (row0, row1, col0, col1), rows from the top, half-open
 
-#: The crop is this fraction of the frame on each side (a 3x magnification in the report).
-CROP_FRACTION = 1.0 / 3.0
+#: The crop is this fraction of the frame on each side (five crops in a row of the report
+#: show it about twice as large as the full images beside each other).
+CROP_FRACTION = 0.25
 #: Blur (fraction of the longer side) before looking for the brightest region, so that the
 #: crop centres on the glow around a light rather than on one hot pixel.
 _BLUR_FRACTION = 0.02

@@ -83,13 +83,12 @@ def parse_variants(text: str | None) -> tuple[str, ...]:
     return tuple(name for name in VARIANTS if name in wanted)
 
 
-def scene_variants(scene_name: str, variants: tuple[str, ...],
-                   minbound_scenes: tuple[str, ...] = DEFAULT_MINBOUND_SCENES) -> list[Variant]:
+def scene_variants(variants: tuple[str, ...], compare_minbound: bool = False) -> list[Variant]:
     """The variants one scene renders, in order: gold first, selective runs, then the
-    equal-time baselines (which need the XSL run's time). XSL without MinBound is added for
-    the scenes in ``minbound_scenes`` when XSL is rendered."""
+    equal-time baselines (which need the XSL run's time). ``compare_minbound`` adds XSL
+    without MinBound when XSL is rendered."""
     names = set(variants)
-    if scene_name in minbound_scenes and EQUAL_TIME_SOURCE in names:
+    if compare_minbound and EQUAL_TIME_SOURCE in names:
         names.add("xsl_no_minbound")
     return [variant for name, variant in VARIANTS.items() if name in names]
 
@@ -114,6 +113,15 @@ def map_seconds(variant: Variant, seconds: dict) -> float:
     return float(sum(float(seconds.get(name, 0.0)) for name in maps_needed(variant)))
 
 
+def scaled_size(size: tuple[int, int], longest_side: int | None) -> tuple[int, int]:
+    """``size`` scaled (aspect kept, rounded) so that its longer side is ``longest_side``."""
+    width, height = size
+    if longest_side is None:
+        return width, height
+    scale = longest_side / max(width, height)
+    return max(1, round(width * scale)), max(1, round(height * scale))
+
+
 def parse_list(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
     """'a,b' -> ('a', 'b'); None -> default."""
     if text is None:
@@ -125,27 +133,33 @@ def parse_list(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
 class ValidationSettings:
     """The knobs of one validation run (the paper: 16 spp ceiling, 512 px on the longer side).
 
-    ``resolution`` None renders at each scene's own resolution. ``vdp`` False reports VDP
-    as skipped (it is slow, and optional anyway).
+    ``resolution`` renders every scene at that size; else ``longest_side`` scales each scene's
+    own resolution to that many pixels on its longer side (the paper's "512 pixels in their
+    largest side"); with neither, each scene renders at its own. ``vdp`` False reports VDP as
+    skipped (it is slow, and optional anyway).
     """
 
     max_spp: int = 16
     resolution: tuple[int, int] | None = None
+    longest_side: int | None = None
     min_spp: int = 1
     tile_size: int = 32
     seed: int = 0
     vdp: bool = True
     variants: tuple[str, ...] = DEFAULT_VARIANTS
-    minbound_scenes: tuple[str, ...] = DEFAULT_MINBOUND_SCENES
 
-    def render_options(self):
+    def render_options(self, max_spp: int | None = None):
+        """The RenderOptions of every render (``max_spp`` overrides the ceiling for one scene)."""
         from .render_options import RenderOptions
 
-        return RenderOptions(max_spp=self.max_spp, min_spp=self.min_spp, tile_size=self.tile_size,
-                             seed=self.seed, resolution=self.resolution).check()
+        if self.longest_side is not None and not 8 <= self.longest_side <= 16384:
+            raise InputError(f"--size must be between 8 and 16384 pixels (got {self.longest_side})")
+        return RenderOptions(max_spp=max_spp or self.max_spp, min_spp=self.min_spp,
+                             tile_size=self.tile_size, seed=self.seed,
+                             resolution=self.resolution).check()
 
     def to_dict(self) -> dict:
         return {"max_spp": self.max_spp, "resolution": list(self.resolution) if self.resolution else None,
+                "longest_side": self.longest_side,
                 "min_spp": self.min_spp, "tile_size": self.tile_size, "seed": self.seed,
-                "vdp": self.vdp, "variants": list(self.variants),
-                "minbound_scenes": list(self.minbound_scenes)}
+                "vdp": self.vdp, "variants": list(self.variants)}

@@ -35,7 +35,7 @@ def run_summary(variant, record: dict, gold: dict, reused: bool) -> dict:
     }
 
 
-def scene_summary(job, sha256: str, size, settings, variants, records: dict, maps: dict,
+def scene_summary(job, sha256: str, size, options, variants, records: dict, maps: dict,
                   warnings: list[str], reused: set[str]) -> dict:
     """A scene's entry of results.json.
 
@@ -47,7 +47,7 @@ def scene_summary(job, sha256: str, size, settings, variants, records: dict, map
         "file": str(job.path),
         "sha256": sha256,
         "size": list(size),
-        "max_spp": settings.max_spp,
+        "max_spp": options.max_spp,
         "maps": {("minbound" if minbound else "no_minbound"): info for minbound, info in maps.items()},
         "runs": {v.name: run_summary(v, records[v.name], gold, v.name in reused) for v in variants},
         "warnings": list(dict.fromkeys(warnings)),

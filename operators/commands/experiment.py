@@ -36,7 +36,10 @@ def add_run_arguments(parser, max_spp: int = 16, help_suffix: str = "") -> None:
     parser.add_argument("--max-spp", type=int, default=max_spp,
                         help=f"samples per pixel of the gold standard and ceiling of the maps "
                              f"(default {max_spp}, the paper's){help_suffix}")
-    parser.add_argument("--resolution", metavar="WxH", help="render size (default: each scene's own)")
+    parser.add_argument("--resolution", metavar="WxH", help="render every scene at this size")
+    parser.add_argument("--size", type=int, metavar="N",
+                        help="scale each scene to N pixels on its longer side (the paper: 512; "
+                             "default: each scene's own resolution)")
     parser.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
     parser.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
     parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
@@ -44,16 +47,14 @@ def add_run_arguments(parser, max_spp: int = 16, help_suffix: str = "") -> None:
                         help="run ColorVideoVDP when it is installed (default on; it is slow)")
 
 
-def settings_from_args(args, variants=None, minbound_scenes=None):
-    from ...core.validation_plan import ValidationSettings, parse_list, parse_variants
+def settings_from_args(args, variants=None):
+    from ...core.validation_plan import ValidationSettings, parse_variants
     from .common import parse_resolution
 
     settings = ValidationSettings(
-        max_spp=args.max_spp, resolution=parse_resolution(args.resolution), min_spp=args.min_spp,
-        tile_size=args.tile_size, seed=args.seed, vdp=args.vdp,
-        variants=variants or parse_variants(getattr(args, "variants", None)),
-        minbound_scenes=minbound_scenes if minbound_scenes is not None
-        else parse_list(getattr(args, "minbound_scenes", None), ()))
+        max_spp=args.max_spp, resolution=parse_resolution(args.resolution),
+        longest_side=args.size, min_spp=args.min_spp, tile_size=args.tile_size, seed=args.seed,
+        vdp=args.vdp, variants=variants or parse_variants(getattr(args, "variants", None)))
     settings.render_options()       # InputError for impossible options, before any work
     return settings
 
@@ -86,7 +87,7 @@ def run_and_report(jobs, settings, out: Path, label: str, quiet: bool) -> dict:
         print(f"VDP skipped: {results['vdp']['skipped']}")
     print(f"{results['rendered']} step(s) computed, {results['reused']} reused; "
           f"results in {out / 'results.json'}")
-    print(f"report: {report}")
+    print(f"report: {report.resolve()}")
     return results
 
 
@@ -107,10 +108,13 @@ def run(args) -> int:
     from ...addon.blend_session import check_blend_file
     from ...addon.validation_runner import SceneJob
     from ...core.example_scenes import resolve_scenes
+    from ...core.validation_plan import parse_list
     from ...core.validation_store import check_output_folder
 
     settings = settings_from_args(args)
-    jobs = [SceneJob(name, check_blend_file(path)) for name, path in resolve_scenes(args.scenes)]
+    minbound = parse_list(args.minbound_scenes, ())
+    jobs = [SceneJob(name, check_blend_file(path), compare_minbound=name in minbound)
+            for name, path in resolve_scenes(args.scenes)]
     out = check_output_folder(args.out)
     run_and_report(jobs, settings, out, NAME, args.quiet)
     return 0
