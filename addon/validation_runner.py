@@ -167,11 +167,11 @@ class _SceneRun:
             if variant.name != GOLD:
                 self.compare(variant)
         return scene_summary(self.job, self.sha256, self.size, self.options, variants, self.records,
-                             {mb: info for mb, (_, _, info, _) in self.maps.items()}, self.warnings,
+                             {mb: info for mb, (_, _, info) in self.maps.items()}, self.warnings,
                              self.reused)
 
     def scene_size(self) -> tuple[int, int]:
-        """The scene's own render size, read once (cached in the maps' inputs otherwise)."""
+        """The scene's own render size (opens the .blend, renders nothing)."""
         from .scene_probe import render_size
 
         return render_size(self.open_scene(warm=False))
@@ -205,10 +205,10 @@ class _SceneRun:
         info = {"folder": self.rel(folder), "seconds": maps.info.get("seconds", {}),
                 "lights": maps.info.get("l", {}), "warnings": maps.info.get("warnings", []),
                 "minbound": minbound}
-        return maps, digest, info, folder
+        return maps, digest, info
 
     def director(self, variant: Variant):
-        maps, digest, _, _ = self.maps[variant.map_options.minbound]
+        maps, digest, _ = self.maps[variant.map_options.minbound]
         o = variant.map_options
         xs = xs_map(maps.x, maps.s, o.wx, o.ws, o.xs_op)
         director = xs if variant.director == "xs" else xsl_map(xs, maps.l, o.wxs, o.wl, o.xsl_op)

@@ -27,6 +27,7 @@ MAP_LABELS = (("x", "X: transmittance"), ("s", "S: saliency"), ("l", "L: lights"
 CROP_RUNS = ("gold", "xsl", "xs", "uniform_equal_time", "adaptive_equal_time")
 #: The columns of the paper-layout tables: the selective runs the paper reports.
 PAPER_COLUMNS = (("xs", "XS"), ("xsl", "XSL"))
+SPEED_COLUMNS = PAPER_COLUMNS + (("uniform_equal_time", "uniform"), ("adaptive_equal_time", "adaptive"))
 
 CSS = """
 body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",sans-serif;margin:0 auto;max-width:1500px;
@@ -34,7 +35,7 @@ body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",sans-serif;margin:0 auto;
 h1{font-size:24px;margin:8px 0}h2{font-size:20px;margin:36px 0 8px;border-bottom:2px solid #ccc}
 h3{font-size:16px;margin:20px 0 6px}
 .meta{color:#555}.note{color:#666;font-size:12px}
-table{border-collapse:collapse;margin:6px 0 14px;background:#fff}
+table{border-collapse:collapse;margin:6px 0 14px;background:#fff;display:block;overflow-x:auto;width:max-content;max-width:100%}
 th,td{border:1px solid #d0d0d0;padding:3px 8px;text-align:right;white-space:nowrap}
 th{background:#eef0f3}td.l,th.l{text-align:left}
 tr.gold td{background:#f3f3f3}tr.equal td{background:#f6f1fa}
@@ -67,7 +68,9 @@ def build_report(results: dict, out_dir: Path) -> str:
     head = (f"<p class=meta>Ceiling {' and '.join(map(str, ceilings)) or '-'} samples per pixel "
             f"(the gold standard's count everywhere), Cycles seed {settings.get('seed')}. "
             "Times as in the paper's Fig. 8: a selective render's time includes making the maps it "
-            "uses. The equal-time baselines get the wall time of the XSL run, maps included.</p>")
+            "uses. The equal-time baselines get the wall time of the XSL run, maps included. Wall "
+            "times (and so speedups) depend on what else the machine was doing; sample ratios "
+            "do not.</p>")
     vdp_line = ("VDP: ColorVideoVDP, probability of detection per pixel." if vdp.get("ran")
                 else f"VDP skipped: {escape(str(vdp.get('skipped')))}")
     body = [
@@ -112,15 +115,34 @@ def _paper_tables(scenes: dict) -> str:
             + "".join(_metric(scenes[name]["runs"][run], metric, key) for name, run, _ in columns) + "</tr>"
             for metric, label in METRICS)
         out.append(f"<h3>{title}</h3><table>{header}{rows}</table>")
-    speed = "".join(
-        f"<td>{_speedup(scenes[name]['runs'][run])}</td>" for name, run, _ in columns)
-    out.append("<h3>Speedup over the gold standard (maps included)</h3>"
-               f"<table>{header}<tr><td class=l>speedup</td>{speed}</tr></table>")
+    rows = []
+    for name, scene in scenes.items():
+        shown = [(key, label) for key, label in SPEED_COLUMNS if key in scene.get("runs", {})]
+        for index, (key, label) in enumerate(shown):
+            run = scene["runs"][key]
+            first = f"<td class=l rowspan={len(shown)}>{escape(name)}</td>" if index == 0 else ""
+            css = " class=equal" if run.get("kind") in ("uniform", "adaptive") else ""
+            rows.append(f"<tr{css}>{first}<td class=l>{escape(run.get('label', key))}</td>"
+                        f"<td>{_speedup(run)}</td><td>{_ratio(run)}</td>"
+                        f"{_metric(run, 'flip', 'mean_flip', 4, '')}"
+                        f"{_metric(run, 'mse', 'average_error_percent')}</tr>")
+    out.append("<h3>Speed and quality: selective against equal-time sampling "
+               "<span class=note>(maps included in the selective times; uniform and adaptive got "
+               "XSL's time)</span></h3><table><tr><th class=l>scene</th><th class=l>run</th>"
+               "<th>speedup over gold</th><th title='gold samples / samples of the run: the "
+               "speedup a renderer without fixed costs would get'>sample ratio</th>"
+               "<th>mean FLIP</th><th>MSE average error</th></tr>"
+               f"{''.join(rows)}</table>")
     return "<h2>All scenes</h2>" + "".join(out)
 
 
 def _speedup(run: dict) -> str:
     value = run.get("speedup_over_gold")
+    return "-" if value is None else f"{value:.2f}&times;"
+
+
+def _ratio(run: dict) -> str:
+    value = run.get("sample_ratio_over_gold")
     return "-" if value is None else f"{value:.2f}&times;"
 
 
