@@ -26,6 +26,9 @@ PASSES = {
     "Object Index": ("use_pass_object_index", "Object Index", "X"),
     # Samples taken per pixel / samples rendered (view_layer.cycles.pass_debug_sample_count).
     "Debug Sample Count": (None, "Debug Sample Count", "X"),
+    # Cycles' denoising data (view_layer.cycles.denoising_store_passes).
+    "Denoising Albedo": (None, "Denoising Albedo", "RGB"),
+    "Denoising Normal": (None, "Denoising Normal", "XYZ"),
 }
 
 

@@ -15,8 +15,9 @@ import numpy as np
 
 from ..core.camera import CameraModel
 from ..core.director import xs_map, xsl_map
-from ..core.light_map import auto_parameters, multi_gaussian, normalise_glow
-from ..core.light_raster import zero_light_map
+from ..core.light_map import auto_parameters
+from ..core.light_map import light_map as glow_map
+from ..core.light_raster import emission_footprints, lamp_footprints, merge_footprints
 from ..core.map_files import MapSet
 from ..core.map_options import MapOptions
 from ..core.saliency_input import modulated_saliency_map
@@ -87,7 +88,7 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
         tick = time.perf_counter()
         lights = [light for light in find_lights(scene, depsgraph, camera) if light.in_frame]
         l_map, light_info = light_map(camera, lights, xres, snapshot.emission, options)
-        if not light_info["drawn"]:
+        if not light_info["lights"]:
             notes.append(NO_LIGHTS_WARNING)
         seconds["l"] = time.perf_counter() - tick
 
@@ -105,8 +106,8 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
     info = {
         "scene": scene.name, "frame": frame_done, "size": [camera.width, camera.height],
         "camera": scene.camera.name, "options": options.to_dict(), "seconds": seconds,
-        "x": xres.info, "snapshot": {"samples": snapshot.samples, "seed": 0,
-                                     "bounces": 0, "volumes": False},
+        "x": xres.info, "snapshot": {"samples": snapshot.samples, "seed": 0, "bounces": 0,
+                                     "volumes": False, "denoised": snapshot.denoised},
         "s": {"model": "Itti, Koch and Niebur 1998 on the tone-mapped snapshot plus 1 - X"},
         "l": light_info, "warnings": list(dict.fromkeys(notes)),
     }
@@ -138,44 +139,20 @@ def light_transmittance(camera: CameraModel, xres: XMapResult) -> Callable[[np.n
 def light_map(camera: CameraModel, lights, xres: XMapResult, emission: np.ndarray,
               options: MapOptions) -> tuple[np.ndarray, dict]:
     """The L map in [0, 1] and what was drawn, with n and sigma_base fixed or per light (auto)."""
-    l0_lamps, drawn = zero_light_map(camera, lights, xres.z, light_transmittance(camera, xres))
-    l0_meshes, _ = zero_light_map(camera, [], xres.z, lambda p: np.ones(len(p)),
-                                  emission=emission, emission_transmittance=xres.x_without_minbound)
-    groups: dict[tuple[int, float], np.ndarray] = {}
-
-    def parameters(optical_depth: float) -> tuple[int, float]:
-        auto_n, auto_sigma = auto_parameters(optical_depth)
-        return (auto_n if options.light_n is None else int(options.light_n),
-                auto_sigma if options.light_sigma_base is None else float(options.light_sigma_base))
-
-    used = []
-    if any(d.drawn for d in drawn):
-        # Each lamp again on its own, so that auto mode can spread each by its own fog.
-        for light, entry in zip([lt for lt in lights if lt.kind != "MESH"], drawn):
-            if not entry.drawn:
-                continue
-            single, _ = zero_light_map(camera, [light], xres.z, lambda p, t=entry.transmittance: np.full(len(p), t))
-            key = parameters(entry.optical_depth)
-            groups[key] = groups.get(key, 0) + single
-            used.append({"light": light.name, "n": key[0], "sigma_base": key[1]})
-    if l0_meshes.any():
-        mesh_pixels = l0_meshes > 0
-        tau = -np.log(np.clip(xres.x_without_minbound[mesh_pixels], 1e-6, 1.0))
-        key = parameters(float(np.median(tau)))
-        groups[key] = groups.get(key, 0) + l0_meshes
-        used.append({"light": "emissive surfaces", "n": key[0], "sigma_base": key[1]})
-    total = np.zeros((camera.height, camera.width))
-    l0_total = np.zeros_like(total)
-    for (n, sigma_base), l0 in groups.items():
-        total += multi_gaussian(l0, n, sigma_base)
-        l0_total += l0
+    footprints, drawn = lamp_footprints(camera, lights, xres.z, light_transmittance(camera, xres))
+    footprints = merge_footprints(footprints, emission_footprints(camera, emission, xres.x_without_minbound))
+    parameters = {}
+    for footprint in footprints:
+        auto_n, auto_sigma = auto_parameters(footprint.optical_depth)
+        parameters[footprint.name] = (
+            auto_n if options.light_n is None else int(options.light_n),
+            auto_sigma if options.light_sigma_base is None else float(options.light_sigma_base))
+    l_map, per_light = glow_map(footprints, (camera.height, camera.width), parameters)
     info = {
-        "drawn": [d.__dict__ for d in drawn if d.drawn] + (
-            [{"name": "emissive surfaces", "kind": "MESH", "pixels": int((l0_meshes > 0).sum())}]
-            if l0_meshes.any() else []),
+        "drawn": [d.__dict__ for d in drawn if d.drawn],
+        "emissive_surfaces": sum(1 for f in footprints if f.name.startswith("emissive surface")),
         "not_drawn": [{"name": d.name, "kind": d.kind, "reason": d.reason} for d in drawn if not d.drawn],
-        "parameters": used,
+        "lights": per_light,
         "sigma_unit": "pixels at 512 px on the longer side",
-        "l0_peak": float(max(l0_lamps.max(), l0_meshes.max())) if l0_lamps.size else 0.0,
     }
-    return normalise_glow(total, l0_total), info
+    return l_map, info

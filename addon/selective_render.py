@@ -18,7 +18,6 @@ the statistics of the run (the ``--stats`` JSON).
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -28,10 +27,10 @@ from ..core.composite import Compositor, crop, render_window
 from ..core.errors import InputError
 from ..core.progress import Progress, ProgressCallback, TileProgress
 from ..core.render_options import RenderOptions
-from ..core.tile_plan import check_director_map, make_plan
+from ..core.tile_plan import Rect, check_director_map, make_plan
 from .scene_probe import camera_model, render_size
 from .scene_state import preserved_scene
-from .tile_render import CyclesWindowRenderer
+from .tile_render import CyclesWindowRenderer, RenderedWindow
 
 #: Cycles' own default noise threshold, what an artist switching adaptive sampling on gets.
 CYCLES_DEFAULT_NOISE_THRESHOLD = 0.01
@@ -50,7 +49,7 @@ class RenderOutcome:
     warnings: list[str] = field(default_factory=list)
 
 
-def _prepare(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
+def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     """Apply the resolution option, check the camera, warn about a non-Cycles engine.
 
     Must run inside ``preserved_scene``. Returns (width, height, warnings).
@@ -96,6 +95,47 @@ def _tile_entry(window, rendered) -> dict:
             "mean_spp": float(np.mean(rendered.samples)), "seconds": rendered.seconds}
 
 
+@dataclass
+class RenderedRect:
+    """One rectangle of a plan, rendered and cropped to its own pixels."""
+
+    rect: Rect
+    window: tuple[int, int, int, int]       # what Cycles rendered: the rectangle and its margin
+    pixels: np.ndarray                      # (h, w, 4) float32 RGBA of the rectangle only
+    samples: np.ndarray | int               # samples per pixel: a number, or (h, w) counts
+    rendered: RenderedWindow
+    guides: np.ndarray | None = None        # (h, w, 6) denoising albedo + normal, cropped
+
+
+def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptions) -> RenderedRect:
+    """Render one rectangle of a plan (grown by ``options.margin``) and crop it back.
+
+    The one place a plan's rectangle becomes pixels, for ``render_selective`` and for the
+    farm's tile tasks alike, so both give the same image.
+    """
+    window = render_window(rect.window, options.margin, renderer.width, renderer.height)
+    rendered = renderer.render(window, rect.spp, adaptive_threshold=options.noise_threshold(rect.spp))
+    samples = rendered.samples
+    if isinstance(samples, np.ndarray):
+        samples = crop(samples, window, rect.window)
+    guides = None if rendered.guides is None else crop(rendered.guides, window, rect.window)
+    return RenderedRect(rect, window, crop(rendered.pixels, window, rect.window), samples, rendered, guides)
+
+
+def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
+                 phases: dict) -> np.ndarray:
+    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase."""
+    if not options.denoise:
+        return image
+    from .denoise import denoise
+
+    started = time.perf_counter()
+    out = denoise(image, None if guides is None else guides[..., :3],
+                  None if guides is None else guides[..., 3:6])
+    phases["denoise"] = time.perf_counter() - started
+    return out
+
+
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
                      progress: ProgressCallback | None = None, mode: str = "xsl",
                      map_seconds: float = 0.0) -> RenderOutcome:
@@ -118,35 +158,32 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
     """
     report = Progress(progress)
     with preserved_scene(scene):
-        width, height, warnings = _prepare(scene, options)
+        width, height, warnings = prepare_render(scene, options)
         started = time.perf_counter()
         data = check_director_map(director_map, width, height)
         plan = make_plan(data, options)
         phases = {"maps": map_seconds, "plan": time.perf_counter() - started}
         tracker = TileProgress(report, [rect.samples for rect in plan.rects], options.render_cost)
         compositor = Compositor(width, height)
+        guides = Compositor(width, height, channels=6) if options.denoise else None
         tiles, composite_s = [], 0.0
         started = time.perf_counter()
-        with CyclesWindowRenderer(scene, options.seed) as renderer:
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             for rect in plan.rects:
                 tracker.start(rect.spp)
-                window = render_window(rect.window, options.margin, width, height)
-                threshold = None
-                if options.adaptive_threshold is not None:
-                    threshold = options.adaptive_threshold / math.sqrt(rect.spp / options.max_spp)
-                rendered = renderer.render(window, rect.spp, adaptive_threshold=threshold)
+                piece = render_rect(renderer, rect, options)
                 placed = time.perf_counter()
-                samples = rendered.samples
-                if isinstance(samples, np.ndarray):
-                    samples = crop(samples, window, rect.window)
-                compositor.add(rect.window, crop(rendered.pixels, window, rect.window), samples)
+                compositor.add(rect.window, piece.pixels, piece.samples)
+                if guides is not None:
+                    guides.add(rect.window, piece.guides, piece.samples)
                 composite_s += time.perf_counter() - placed
-                tiles.append(_tile_entry(rect.window, rendered) | {"window": list(window)})
+                tiles.append(_tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
                 tracker.finish()
         phases["renders"] = time.perf_counter() - started - composite_s
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
+        image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
         stats = _stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
     stats["plan"] = plan.to_dict()
     stats["ideal_speedup"] = plan.ideal_speedup
@@ -160,11 +197,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
     """One ordinary Cycles render of the whole frame (optionally time-limited)."""
     report = Progress(progress)
     with preserved_scene(scene):
-        width, height, warnings = _prepare(scene, options)
+        width, height, warnings = prepare_render(scene, options)
         phases = {"maps": 0.0}
         started = time.perf_counter()
         tiles = []
-        with CyclesWindowRenderer(scene, options.seed) as renderer:
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             report.update(0.0, f"{mode}: rendering")
             time_limit = 0.0
             if time_budget is not None:
@@ -183,6 +220,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(_tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
+        image = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = _stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
@@ -193,7 +231,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         stats.update(time_budget_s=time_budget, time_limit_s=time_limit,
                      stopped_by_time=rendered.samples_rendered < samples
                      and rendered.seconds >= 0.9 * time_limit)
-    return RenderOutcome(rendered.pixels, per_pixel, stats, warnings)
+    return RenderOutcome(image, per_pixel, stats, warnings)
 
 
 def render_gold(scene, options: RenderOptions, progress: ProgressCallback | None = None) -> RenderOutcome:

@@ -6,7 +6,8 @@ One ``CyclesWindowRenderer`` per run, used inside ``addon.scene_state.preserved_
 - persistent data on, so the scene is synced and its BVH built once for all windows;
 - a render border cropped to the window for each render; one temporary folder for all;
 - a plain EXR of the Combined pass (a multilayer one with Cycles' sample-count pass when
-  adaptive sampling or a time limit makes the count per pixel unknown in advance);
+  adaptive sampling or a time limit makes the count per pixel unknown in advance, and with
+  the denoising albedo and normal when the frame is to be denoised afterwards);
 - a fixed seed, no denoiser, no time limit, no per-view-layer samples, no compositor, no
   sequencer, no stamp: the pixels are Cycles' own path-traced estimate, reproducible.
 
@@ -46,6 +47,7 @@ class RenderedWindow:
     samples_rendered: int                        # passes Cycles completed (< set when stopped early)
     samples_reported: int | None                 # the count in the EXR header Cycles wrote
     seconds: float                               # wall time of the render call
+    guides: np.ndarray | None = None             # (h, w, 6) denoising albedo RGB + normal XYZ
 
 
 def render_layer(scene):
@@ -70,9 +72,11 @@ class CyclesWindowRenderer:
         The scene; must be inside ``preserved_scene`` for the renderer's whole life.
     seed
         Cycles' seed for every render.
+    guides
+        Also render Cycles' denoising albedo and normal (for ``addon.denoise``).
     """
 
-    def __init__(self, scene, seed: int):
+    def __init__(self, scene, seed: int, guides: bool = False):
         self.scene = scene
         self.layer = render_layer(scene)
         self.width, self.height = render_size(scene)
@@ -91,6 +95,8 @@ class CyclesWindowRenderer:
         render.use_sequencer = False
         render.use_stamp = False
         render.use_file_extension = True
+        self.guides = guides
+        self.layer.cycles.denoising_store_passes = guides
         self.folder = Path(tempfile.mkdtemp(prefix="xsl-tiles-"))
         render.filepath = str(self.folder / "window")
         self._status_max = 0
@@ -149,13 +155,14 @@ class CyclesWindowRenderer:
 
         scene, cycles, render = self.scene, self.scene.cycles, self.scene.render
         counted = adaptive_threshold is not None or time_limit > 0.0
+        multilayer = counted or self.guides
         changed = [self._assign(cycles, "samples", samples),
                    self._assign(cycles, "use_adaptive_sampling", adaptive_threshold is not None),
                    self._assign(cycles, "time_limit", time_limit),
                    self._assign(self.layer.cycles, "pass_debug_sample_count", counted)]
         if adaptive_threshold is not None:
             changed.append(self._assign(cycles, "adaptive_threshold", adaptive_threshold))
-        self._set_output(multilayer=counted)
+        self._set_output(multilayer=multilayer)
         if window is None:
             self._assign(render, "use_border", False)
             shape = (self.height, self.width)
@@ -190,8 +197,11 @@ class CyclesWindowRenderer:
         if not files:
             raise RuntimeError("Cycles wrote no image")
         channels, attributes = read_exr_parts(files[0])
-        wanted = ("Combined", "Debug Sample Count") if counted else ("Combined",)
+        wanted = ("Combined",) + (("Debug Sample Count",) if counted else ()) \
+            + (("Denoising Albedo", "Denoising Normal") if self.guides else ())
         passes = passes_from_channels(channels, self.layer.name, wanted)
+        guides = (np.concatenate([passes["Denoising Albedo"], passes["Denoising Normal"]], axis=2)
+                  if self.guides else None)
         pixels = passes["Combined"]
         if pixels.shape[:2] != shape:
             raise RuntimeError(f"Cycles rendered {pixels.shape[1]}x{pixels.shape[0]} pixels "
@@ -204,5 +214,5 @@ class CyclesWindowRenderer:
             rendered = self._status_max or samples
             # The pass holds each pixel's samples divided by the samples the render completed.
             per_pixel = np.rint(passes["Debug Sample Count"][:, :, 0] * rendered).astype(np.float32)
-            return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds)
-        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds)
+            return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds, guides)
+        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds, guides)

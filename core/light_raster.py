@@ -168,29 +168,44 @@ def _perpendicular_axes(direction: np.ndarray) -> np.ndarray:
     return np.stack([x, np.cross(d, x)])
 
 
-def zero_light_map(camera: CameraModel, lights: list[LightSource], distance: np.ndarray,
-                   transmittance_to: Callable[[np.ndarray], np.ndarray],
-                   emission: np.ndarray | None = None,
-                   emission_transmittance: np.ndarray | None = None,
-                   ) -> tuple[np.ndarray, list[DrawnLight]]:
-    """Draw L_0 for the camera's full frame.
+@dataclass
+class Footprint:
+    """One light source in the 0-LightMap: its pixels and what reaches the eye from them.
+
+    ``values`` (a patch placed at ``row0, col0``) sum to the light's irradiance at the eye
+    times the transmittance; ``optical_depth`` is tau between the eye and the light.
+    """
+
+    name: str
+    row0: int
+    col0: int
+    values: np.ndarray
+    optical_depth: float
+
+    @property
+    def mass(self) -> float:
+        return float(self.values.sum())
+
+    def place(self, shape: tuple[int, int], scale: float = 1.0, out: np.ndarray | None = None) -> np.ndarray:
+        out = np.zeros(shape, dtype=np.float64) if out is None else out
+        h, w = self.values.shape
+        out[self.row0:self.row0 + h, self.col0:self.col0 + w] += scale * self.values
+        return out
+
+
+def lamp_footprints(camera: CameraModel, lights: list[LightSource], distance: np.ndarray,
+                    transmittance_to: Callable[[np.ndarray], np.ndarray],
+                    ) -> tuple[list[Footprint], list[DrawnLight]]:
+    """The footprint of every lamp the eye can see, and why each lamp was or was not drawn.
 
     Parameters
     ----------
     camera : the camera model (full frame, row 0 at the top).
-    lights : lamps (emissive meshes are taken from ``emission`` instead).
+    lights : lamps (emissive meshes come from :func:`emission_footprints`; MESH entries are skipped).
     distance : (H, W) distance along each pixel's ray to the first surface, ``inf`` for none.
     transmittance_to : maps world points (N, 3) to exp(-tau) from the eye to each point.
-    emission : optional (H, W) or (H, W, 3) radiance of directly visible emissive surfaces.
-    emission_transmittance : (H, W) transmittance to those surfaces (the X map).
-
-    Returns
-    -------
-    (H, W) float32 L_0 and one DrawnLight per lamp (why it was or was not drawn).
     """
-    height, width = camera.height, camera.width
-    out = np.zeros((height, width), dtype=np.float64)
-    report = []
+    footprints, report = [], []
     eye = camera.eye
     for light in lights:
         if light.kind == "MESH":
@@ -228,13 +243,91 @@ def zero_light_map(camera: CameraModel, lights: list[LightSource], distance: np.
         entry.transmittance, entry.optical_depth = t, float(-math.log(max(t, 1e-30)))
         entry.irradiance, entry.drawn = irradiance, True
         entry.reason = "drawn" if entry.visible_fraction > 0.999 else "partly hidden: clipped"
-        out[row0:row0 + h, col0:col0 + w] += visible / coverage.sum() * irradiance * t
+        footprints.append(Footprint(light.name, row0, col0,
+                                    visible / coverage.sum() * irradiance * t, entry.optical_depth))
+    return footprints, report
+
+
+def emission_footprints(camera: CameraModel, emission: np.ndarray,
+                        transmittance: np.ndarray | None = None) -> list[Footprint]:
+    """Each connected patch of directly visible emissive surface as one light.
+
+    ``emission`` is the radiance of what the eye sees directly (Cycles' Emit pass);
+    radiance x pixel solid angle is the irradiance a pixel's worth sends to the eye, and
+    ``transmittance`` (the X map without MinBound) what the medium lets through.
+    """
+    from scipy import ndimage
+
+    glow = np.asarray(emission, dtype=np.float64)
+    glow = luminance(np.moveaxis(glow[..., :3], -1, 0)) if glow.ndim == 3 else glow
+    glow = np.maximum(glow, 0.0)
+    tau_source = np.ones_like(glow) if transmittance is None else np.asarray(transmittance, dtype=np.float64)
+    labels, count = ndimage.label(glow > 0)
+    footprints = []
+    for index, window in enumerate(ndimage.find_objects(labels), start=1):
+        mask = labels[window] == index
+        t = tau_source[window]
+        values = np.where(mask, glow[window] * t, 0.0) * pixel_solid_angle(camera)
+        if values.sum() <= 0:
+            continue
+        weighted_t = float((glow[window] * t)[mask].sum() / max(glow[window][mask].sum(), 1e-300))
+        footprints.append(Footprint(f"emissive surface {index}", window[0].start, window[1].start,
+                                    values, float(-math.log(max(weighted_t, 1e-30)))))
+    return footprints
+
+
+#: An emissive patch whose centre lies within this many pixels of a lamp's footprint is the
+#: lamp's own bulb or lens (a street lamp's glass, a headlight's disc): one light, not two.
+MERGE_DISTANCE_PX = 4.0
+
+
+def merge_footprints(lamps: list[Footprint], surfaces: list[Footprint],
+                     distance_px: float = MERGE_DISTANCE_PX) -> list[Footprint]:
+    """Lamps with the emissive surfaces that are their visible bulbs merged into them."""
+    merged = [Footprint(f.name, f.row0, f.col0, f.values.copy(), f.optical_depth) for f in lamps]
+    rest = []
+    for surface in surfaces:
+        h, w = surface.values.shape
+        rows, cols = np.nonzero(surface.values)
+        weights = surface.values[rows, cols]
+        centre_row = surface.row0 + float((rows * weights).sum() / weights.sum()) + 0.5
+        centre_col = surface.col0 + float((cols * weights).sum() / weights.sum()) + 0.5
+        owner = None
+        for lamp in merged:
+            lh, lw = lamp.values.shape
+            if (lamp.row0 - distance_px <= centre_row <= lamp.row0 + lh + distance_px
+                    and lamp.col0 - distance_px <= centre_col <= lamp.col0 + lw + distance_px):
+                owner = lamp
+                break
+        if owner is None:
+            rest.append(surface)
+            continue
+        row0, col0 = min(owner.row0, surface.row0), min(owner.col0, surface.col0)
+        row1 = max(owner.row0 + owner.values.shape[0], surface.row0 + h)
+        col1 = max(owner.col0 + owner.values.shape[1], surface.col0 + w)
+        values = np.zeros((row1 - row0, col1 - col0))
+        for part in (owner, surface):
+            ph, pw = part.values.shape
+            values[part.row0 - row0:part.row0 - row0 + ph, part.col0 - col0:part.col0 - col0 + pw] += part.values
+        owner.row0, owner.col0, owner.values = row0, col0, values
+    return merged + rest
+
+
+def zero_light_map(camera: CameraModel, lights: list[LightSource], distance: np.ndarray,
+                   transmittance_to: Callable[[np.ndarray], np.ndarray],
+                   emission: np.ndarray | None = None,
+                   emission_transmittance: np.ndarray | None = None,
+                   ) -> tuple[np.ndarray, list[DrawnLight]]:
+    """L_0 for the camera's full frame: every footprint summed, as the paper draws it.
+
+    Returns the (H, W) float32 map and one DrawnLight per lamp (why it was or was not drawn).
+    """
+    footprints, report = lamp_footprints(camera, lights, distance, transmittance_to)
     if emission is not None:
-        glow = np.asarray(emission, dtype=np.float64)
-        glow = luminance(np.moveaxis(glow[..., :3], -1, 0)) if glow.ndim == 3 else glow
-        if emission_transmittance is not None:
-            glow = glow * np.asarray(emission_transmittance, dtype=np.float64)
-        out += np.maximum(glow, 0.0) * pixel_solid_angle(camera)
+        footprints = merge_footprints(footprints, emission_footprints(camera, emission, emission_transmittance))
+    out = np.zeros((camera.height, camera.width), dtype=np.float64)
+    for footprint in footprints:
+        footprint.place(out.shape, out=out)
     return out.astype(np.float32), report
 
 

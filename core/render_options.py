@@ -6,6 +6,7 @@ cut into tiles (``core.tile_plan``); these options say how.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 from .errors import InputError
@@ -56,6 +57,10 @@ class RenderOptions:
         the noise the plain plan would leave there).
     resolution
         (width, height) to render at instead of the scene's own (percentage taken as 100).
+    denoise
+        Denoise the finished frame with Open Image Denoise (Cycles' own denoiser), guided by
+        albedo and normal passes, the same way in every mode; tiles are never denoised one
+        by one (that would seam). ``addon.denoise`` says why this is on by default.
     """
 
     max_spp: int
@@ -68,6 +73,7 @@ class RenderOptions:
     render_cost: int = 1024
     adaptive_threshold: float | None = None
     resolution: tuple[int, int] | None = None
+    denoise: bool = True
 
     def check(self) -> "RenderOptions":
         """Raise InputError naming the first impossible option; return self."""
@@ -96,6 +102,14 @@ class RenderOptions:
             if width < 1 or height < 1:
                 raise InputError(f"--resolution must be positive (got {width}x{height})")
         return self
+
+    def noise_threshold(self, spp: int) -> float | None:
+        """Cycles' noise threshold for a rectangle of ``spp`` samples (None without
+        per-rectangle adaptive sampling): ``adaptive_threshold / sqrt(spp / max_spp)``, looser
+        where the map asked for fewer samples."""
+        if self.adaptive_threshold is None:
+            return None
+        return self.adaptive_threshold / math.sqrt(spp / self.max_spp)
 
     def check_frame(self, width: int, height: int) -> None:
         """Raise InputError when the tiles do not fit the frame they are cut from."""

@@ -126,10 +126,12 @@ def test_bad_parameters_name_the_option(n, sigma_base):
 
 
 def test_auto_parameters_thicken_with_optical_depth():
-    values = [auto_parameters(tau) for tau in (0.0, 0.2, 1.0, 3.0, 10.0)]
+    values = [auto_parameters(tau) for tau in (0.0, 0.2, 1.0, 3.0, 20.0)]
     assert values[0] == (4, 1.0)
     assert [v[0] for v in values] == sorted(v[0] for v in values)
-    assert values[-1][0] == 20 and values[-1][1] == pytest.approx(10.0, abs=0.1)
+    assert [v[1] for v in values] == sorted(v[1] for v in values)
+    assert auto_parameters(0.8) == (8, pytest.approx(3.5, abs=0.05))    # the paper's thin road
+    assert values[-1][0] == 20 and values[-1][1] == pytest.approx(10.0, abs=0.2)
 
 
 # --- the 0-LightMap -----------------------------------------------------------------

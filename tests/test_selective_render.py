@@ -51,7 +51,7 @@ def test_tiles_are_bit_identical_to_full_frames_with_the_exact_margin(fog):
     """Neighbouring rectangles with different counts, each pixel equal to a full-frame render
     with its count: no seam is possible. (Blender 5's volume scattering probability guiding
     looks 2 x 5 px around a pixel; the margin covers it.)"""
-    options = RenderOptions(max_spp=8, tile_size=16, margin=EXACT_MARGIN, seed=2)
+    options = RenderOptions(max_spp=8, tile_size=16, margin=EXACT_MARGIN, seed=2, denoise=False)
     outcome = sr.render_selective(fog, checker_map(0.25, 0.75), options)
     assert len(outcome.stats["tiles"]) == 24
     for spp in (2, 6):
@@ -65,7 +65,7 @@ def test_pixel_filter_adds_no_seam_at_borders(fog):
     full frame's pixels: Cycles importance-samples its Blackman-Harris filter, so a pixel only
     ever receives its own samples."""
     fog.cycles.volume_biased = True
-    outcome = sr.render_selective(fog, checker_map(0.25, 0.75), RenderOptions(max_spp=8, tile_size=16))
+    outcome = sr.render_selective(fog, checker_map(0.25, 0.75), RenderOptions(max_spp=8, tile_size=16, denoise=False))
     for spp in (2, 6):
         where = outcome.samples == spp
         np.testing.assert_array_equal(outcome.image[where], full_frame(fog, spp)[where])
@@ -74,7 +74,7 @@ def test_pixel_filter_adds_no_seam_at_borders(fog):
 def test_default_tiles_are_unbiased_at_their_edges(fog):
     """Margin 0 with guided volumes: near tile edges the paths differ from a full-frame render
     (guidance sees fewer neighbours), but only as noise: no step in brightness at the edges."""
-    grid = sr.render_selective(fog, checker_map(0.5, 0.625), RenderOptions(max_spp=8, tile_size=16))
+    grid = sr.render_selective(fog, checker_map(0.5, 0.625), RenderOptions(max_spp=8, tile_size=16, denoise=False))
     assert len(grid.stats["tiles"]) == 24 and set(np.unique(grid.samples)) == {4, 5}
     rows, cols = np.mgrid[0:H, 0:W]
     edge = np.minimum(np.minimum(rows % 16, 15 - rows % 16), np.minimum(cols % 16, 15 - cols % 16)) < 5
@@ -88,7 +88,7 @@ def test_default_tiles_are_unbiased_at_their_edges(fog):
 
 
 def test_gold_is_a_plain_cycles_render(fog):
-    gold = sr.render_gold(fog, RenderOptions(max_spp=4, seed=7))
+    gold = sr.render_gold(fog, RenderOptions(max_spp=4, seed=7, denoise=False))
     with preserved_scene(fog):
         fog.cycles.samples = 4
         fog.cycles.seed = 7

@@ -67,7 +67,7 @@ def test_snapshot_is_direct_light_only(blender):
     background = scene.world.node_tree.nodes["Background"]
     background.inputs["Strength"].default_value = 0.0       # no sky light: only the sun
     blender.data.objects["Sphere"].hide_render = True
-    snap = render_snapshot(scene, samples=8).combined[..., :3].max(axis=2)
+    snap = render_snapshot(scene, samples=8, denoise=False).combined[..., :3].max(axis=2)
     with preserved_scene(scene):
         scene.cycles.samples = 16
         full = render_passes(scene)["Combined"][..., :3].max(axis=2)

@@ -1,4 +1,5 @@
-"""Options several commands share: the scene to open, resolution and frame, map options."""
+"""Options several commands share: the scene to open, resolution and frame, map options,
+tile options."""
 from __future__ import annotations
 
 import argparse
@@ -31,6 +32,13 @@ def _auto_or(kind):
     return convert
 
 
+def _off_or(kind):
+    def convert(text: str):
+        return None if text == "off" else kind(text)
+    convert.__name__ = f"{kind.__name__} or off"
+    return convert
+
+
 def add_map_arguments(parser) -> None:
     """The paper's map options (DESIGN.md): XS and XSL weights and operators, L's n and
     sigma_base (or auto), MinBound."""
@@ -48,6 +56,41 @@ def add_map_arguments(parser) -> None:
                        help="eq. 6 sigma_base in px at 512 px, or auto (auto)")
     group.add_argument("--minbound", action=argparse.BooleanOptionalAction, default=defaults.minbound,
                        help="fill sky pixels with the smallest X (MinBound; on)")
+
+
+def add_tile_arguments(parser) -> None:
+    """How a selective render cuts the frame into rectangles (``core.render_options.RenderOptions``)."""
+    tiles = parser.add_argument_group("tiles (xs, xsl)")
+    tiles.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
+    tiles.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
+    tiles.add_argument("--tile-quantile", type=float, default=1.0,
+                       help="quantile of a tile's per-pixel targets it renders with (default 1 = max)")
+    tiles.add_argument("--spp-levels", type=int, default=0,
+                       help="round tile samples up to N geometric levels (default 0 = off)")
+    tiles.add_argument("--margin", type=int, default=0,
+                       help="pixels rendered around each rectangle and cropped (default 0; "
+                            "10 = bit-identical to a full-frame render)")
+    tiles.add_argument("--render-cost", type=int, default=1024,
+                       help="fixed cost of one render in pixel-samples; tiles split down to 8 px "
+                            "where that saves more (default 1024)")
+    tiles.add_argument("--adaptive-threshold", type=_off_or(float), default=None,
+                       help="Cycles adaptive sampling inside each rectangle, noise threshold "
+                            "T / sqrt(spp / max-spp) (default: off)")
+    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                        help="denoise the finished frame with Open Image Denoise, guided by albedo "
+                             "and normal, the same in every mode (default on)")
+
+
+def render_options_from_args(args):
+    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked."""
+    from ...core.render_options import RenderOptions
+
+    return RenderOptions(
+        max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
+        resolution=parse_resolution(args.resolution), denoise=args.denoise).check()
 
 
 def map_options_from_args(args) -> MapOptions:

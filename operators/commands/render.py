@@ -11,8 +11,8 @@ import time
 from pathlib import Path
 
 from ...core.errors import InputError
-from .common import (add_map_arguments, add_scene_arguments, map_options_from_args,
-                     parse_resolution, warnings_as_lines)
+from .common import (add_map_arguments, add_scene_arguments, add_tile_arguments,
+                     map_options_from_args, render_options_from_args, warnings_as_lines)
 
 NAME = "render"
 HELP = "render the scene selectively (xs, xsl) or as a baseline (gold, uniform, adaptive)"
@@ -33,23 +33,7 @@ def add_arguments(parser) -> None:
     maps.add_argument("--maps", metavar="DIR", help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
     maps.add_argument("--save-maps", metavar="DIR", help="also write the maps computed on the fly here")
     add_map_arguments(parser)
-    tiles = parser.add_argument_group("tiles (xs, xsl)")
-    tiles.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
-    tiles.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
-    tiles.add_argument("--tile-quantile", type=float, default=1.0,
-                       help="quantile of a tile's per-pixel targets it renders with (default 1 = max)")
-    tiles.add_argument("--spp-levels", type=int, default=0,
-                       help="round tile samples up to N geometric levels (default 0 = off)")
-    tiles.add_argument("--margin", type=int, default=0,
-                       help="pixels rendered around each rectangle and cropped (default 0; "
-                            "10 = bit-identical to a full-frame render)")
-    tiles.add_argument("--render-cost", type=int, default=1024,
-                       help="fixed cost of one render in pixel-samples; tiles split down to 8 px "
-                            "where that saves more (default 1024)")
-    tiles.add_argument("--adaptive-threshold", type=float,
-                       help="Cycles adaptive sampling inside each rectangle, noise threshold "
-                            "T / sqrt(spp / max-spp) (default: off)")
-    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    add_tile_arguments(parser)
     budget = parser.add_argument_group("budget (uniform, adaptive)")
     budget.add_argument("--spp", type=int, help="uniform: samples per pixel")
     budget.add_argument("--budget-from", metavar="STATS.json",
@@ -63,16 +47,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def _options(args):
-    from ...core.render_options import RenderOptions
-
-    return RenderOptions(
-        max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
-        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
-        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=parse_resolution(args.resolution)).check()
-
-
 def _read_budget(path: str) -> dict:
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -83,6 +57,12 @@ def _read_budget(path: str) -> dict:
     if not isinstance(data, dict) or not {"mean_spp", "wall_s"} <= data.keys():
         raise InputError(f"{path} is not the --stats JSON of an xsl-render render run")
     return data
+
+
+def _render_budget(stats: dict) -> float:
+    """Wall time an equal-time run may render for: the selective run's, less its denoising
+    (the equal-time run denoises its own frame after Cycles stops, just as long)."""
+    return float(stats["wall_s"]) - float(stats.get("phases_s", {}).get("denoise", 0.0))
 
 
 def _budget(args) -> dict:
@@ -99,7 +79,7 @@ def _budget(args) -> dict:
             if args.equal_time < 0:
                 if stats is None:
                     raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-                return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+                return {"seconds": _render_budget(stats), "from": args.budget_from}
             if args.equal_time <= 0:
                 raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
             return {"seconds": args.equal_time}
@@ -113,7 +93,7 @@ def _budget(args) -> dict:
         if args.equal_time is not None and args.equal_time > 0:
             return {"seconds": args.equal_time}
         if stats is not None:
-            return {"seconds": float(stats["wall_s"]), "from": args.budget_from}
+            return {"seconds": _render_budget(stats), "from": args.budget_from}
         raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
     return {}
 
@@ -145,7 +125,7 @@ def _compute_map(scene, args, map_options, options):
 
 
 def run(args) -> int:
-    options = _options(args)
+    options = render_options_from_args(args)
     out = Path(args.out)
     if out.suffix.lower() != ".exr":
         raise InputError(f"--out must name an .exr file (got {out})")

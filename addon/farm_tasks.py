@@ -1,0 +1,121 @@
+"""The Blender side of a farm job's tasks: the maps of a frame, and a share of its rectangles.
+
+What is done already and what a task owns is decided in ``core`` (``core.farm_files``,
+``core.task_groups``) before Blender opens the scene, so a task with nothing left to do
+returns at once. The pixels come from ``selective_render.render_rect``, the same code
+``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan.
+"""
+from __future__ import annotations
+
+import os
+import socket
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from ..core.errors import InputError
+from ..core.farm_files import (FrameFiles, load_plan, maps_inputs, renderer_version, scene_sha256,
+                               valid_plan, valid_tile, write_plan_record, write_tile)
+from ..core.map_files import write_map_set
+from ..core.map_options import MapOptions
+from ..core.render_options import RenderOptions
+from ..core.task_groups import plan_group
+from ..core.tile_plan import make_plan
+
+Log = Callable[[str], None]
+
+
+@dataclass
+class TaskOutcome:
+    """What a task did: its work items, those rendered now and those already finished."""
+
+    total: int
+    done_now: list[str] = field(default_factory=list)
+    reused: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
+                  mode: str, map_options: MapOptions, options: RenderOptions) -> TaskOutcome:
+    """Director maps and tile plan of ``frame`` unless a finished plan for the same inputs exists."""
+    from .blend_session import check_blend_file
+
+    started = time.perf_counter()
+    files = FrameFiles(Path(output), frame)
+    check_blend_file(scene_path)
+    inputs = maps_inputs(scene_sha256(scene_path), scene_name, frame, mode, map_options.to_dict(), options)
+    if valid_plan(files, inputs) is not None:
+        return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started)
+
+    from .blend_session import open_blend
+    from .director_maps import compute_maps
+
+    scene = open_blend(scene_path, scene_name)
+    maps = compute_maps(scene, map_options, size=options.resolution, frame=frame, cache_dir=files.maps)
+    maps.info["file"] = str(scene_path)
+    write_map_set(files.maps, maps)
+    plan = make_plan(maps.director(mode), options)
+    write_plan_record(files, inputs, plan, files.maps / f"{mode}.exr",
+                      {"seconds": maps.info["seconds"], "warnings": maps.info.get("warnings", [])})
+    return TaskOutcome(1, done_now=[files.stem], seconds=time.perf_counter() - started)
+
+
+def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group: int, groups: int,
+                   log: Log | None = None) -> TaskOutcome:
+    """Render the rectangles of ``frame`` that task ``group`` of ``groups`` owns and that have
+    no finished image yet; each is written (image, then record) as soon as it is rendered."""
+    from .blend_session import check_blend_file
+
+    started = time.perf_counter()
+    log = log or (lambda line: None)
+    files = FrameFiles(Path(output), frame)
+    check_blend_file(scene_path)
+    record = load_plan(files)
+    if scene_sha256(scene_path) != record.scene_digest:
+        raise InputError(f"{scene_path} is not the scene the maps of frame {frame} were computed "
+                         "from (it changed, or is another file); rerun the maps step")
+    if renderer_version() != record.blender:
+        raise InputError(f"frame {frame} was planned with Blender {record.blender} but this machine "
+                         f"renders with {renderer_version()}; one job needs one Blender release")
+    options = record.options
+    mine = plan_group(record.plan.rects, group, groups, options.render_cost)
+    outcome = TaskOutcome(len(mine))
+    todo = []
+    for rect in mine:
+        if valid_tile(files, record, rect) is None:
+            todo.append(rect)
+        else:
+            outcome.reused.append(files.rect_name(rect))
+    if not todo:
+        outcome.seconds = time.perf_counter() - started
+        return outcome
+
+    from .blend_session import open_blend
+    from .scene_state import preserved_scene
+    from .selective_render import prepare_render, render_rect
+    from .tile_render import CyclesWindowRenderer
+
+    scene = open_blend(scene_path, record.scene_name)
+    scene.frame_set(frame)                  # the opened copy only; the file is never written
+    with preserved_scene(scene):
+        width, height, outcome.warnings = prepare_render(scene, options)
+        if (width, height) != (record.plan.width, record.plan.height):
+            raise InputError(f"the plan of frame {frame} is {record.plan.width}x{record.plan.height} "
+                             f"but the scene renders {width}x{height}; rerun the maps step")
+        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
+            for rect in todo:
+                piece = render_rect(renderer, rect, options)
+                write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
+                    "group": group, "groups": groups, "spp": rect.spp,
+                    "samples_rendered": piece.rendered.samples_rendered,
+                    "seconds": piece.rendered.seconds, "render_id": uuid.uuid4().hex,
+                    "pid": os.getpid(), "host": socket.gethostname(),
+                    "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())})
+                name = files.rect_name(rect)
+                outcome.done_now.append(name)
+                log(f"rendered {name} at {rect.spp} spp in {piece.rendered.seconds:.2f} s")
+    outcome.seconds = time.perf_counter() - started
+    return outcome

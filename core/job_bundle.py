@@ -1,0 +1,52 @@
+"""A job bundle on disk: the folder layout AWS Deadline Cloud submits and ``openjd`` runs.
+
+::
+
+    DIR/template.yaml            the Open Job Description job template
+    DIR/parameter_values.yaml    the values chosen at bundle time (``parameterValues`` list)
+    DIR/xsl_render_bundle.json   our marker: what wrote the folder, and when
+    DIR/output/                  where the job writes (by default; the OutputDir parameter)
+
+The folder is ours to write when it does not exist, is empty, or holds our marker; any
+other folder is refused, so a typo in --bundle never overwrites someone's files. An
+existing bundle of ours is rewritten in place and its output folder kept: a rerun of the
+job then skips every task whose results are still current (``core.farm_files``).
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .errors import InputError
+from .files import write_json, write_text
+
+MARKER = "xsl_render_bundle.json"
+TEMPLATE = "template.yaml"
+PARAMETER_VALUES = "parameter_values.yaml"
+
+
+def check_bundle_folder(folder: str | Path) -> Path:
+    """``folder`` if a bundle may be written there; InputError (one line) otherwise."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--bundle {folder} exists and is not a folder")
+    if folder.is_dir() and any(folder.iterdir()) and not (folder / MARKER).is_file():
+        raise InputError(f"--bundle {folder} is not empty and is not an xsl-render job bundle "
+                         f"(no {MARKER}); refusing to overwrite it")
+    return folder
+
+
+def _yaml(data: dict) -> str:
+    import yaml     # PyYAML: pinned with openjd-cli (requirements.lock)
+
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=100)
+
+
+def write_bundle(folder: str | Path, template: dict, values: dict, summary: dict) -> list[Path]:
+    """Write the bundle (marker first, so a half-written bundle is still recognised as ours)."""
+    folder = check_bundle_folder(folder)
+    marker = {"generator": "xsl-render farm", "format": 1,
+              "written": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **summary}
+    return [write_json(folder / MARKER, marker),
+            write_text(folder / TEMPLATE, _yaml(template)),
+            write_text(folder / PARAMETER_VALUES, _yaml(values))]

@@ -1,0 +1,89 @@
+"""Split a frame's tile plan between farm tasks so that every task costs about the same.
+
+A farm job cannot know the rectangles of a frame when it is submitted: they come from the
+director maps, which the job's first step computes. So the job has a fixed number K of tile
+tasks per frame, and each task takes its share of the plan with ``plan_group`` once the plan
+exists. Every task computes the same partition (it depends only on the plan and K), so no
+two tasks render the same rectangle and together they render all of them; a task whose
+group is empty (fewer rectangles than tasks) has nothing to do.
+
+The cost of a rectangle is the plan's own cost model (``core.tile_plan.split_tile``): its
+pixels times its samples, plus ``render_cost``, the fixed price of one Cycles render in
+pixel-samples. The partition is the longest-processing-time rule (Graham 1969): rectangles
+from the most to the least expensive, each to the group that has cost least so far. Its
+largest group is at most 4/3 of the best possible one, and much closer when the plan has
+many small rectangles, as selective plans do.
+"""
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+
+from .errors import InputError
+from .tile_plan import Rect
+
+#: More tile tasks per frame than this is a submission mistake, not a plan (a 4K frame at
+#: the smallest tile has ~130k rectangles, but a farm job of a million tasks is no help).
+MAX_GROUPS = 10000
+
+
+def rect_cost(rect: Rect, render_cost: int) -> int:
+    """Pixel-samples one rectangle costs: pixels x samples + the fixed cost of a render."""
+    return rect.samples + render_cost
+
+
+def check_groups(groups: int) -> int:
+    """``groups`` if it is a sensible number of tile tasks per frame, else InputError."""
+    if not 1 <= groups <= MAX_GROUPS:
+        raise InputError(f"--tasks-per-frame must be between 1 and {MAX_GROUPS} (got {groups})")
+    return groups
+
+
+def partition(costs: list[int], groups: int) -> list[list[int]]:
+    """Indices of ``costs`` in ``groups`` lists whose sums are as equal as LPT makes them.
+
+    Deterministic: equal costs go in index order and equal loads to the lowest group, so
+    every task of a farm job computes the same partition. Each list is sorted (plan order).
+    """
+    check_groups(groups)
+    order = sorted(range(len(costs)), key=lambda index: (-costs[index], index))
+    loads = [(0, group) for group in range(groups)]     # a heap of (cost so far, group)
+    members: list[list[int]] = [[] for _ in range(groups)]
+    for index in order:
+        load, group = heapq.heappop(loads)
+        members[group].append(index)
+        heapq.heappush(loads, (load + costs[index], group))
+    return [sorted(indices) for indices in members]
+
+
+@dataclass(frozen=True)
+class Grouping:
+    """A plan's rectangles split into tile tasks, and how even the split is."""
+
+    groups: list[list[int]]         # rectangle indices (into plan.rects) of each task
+    costs: list[int]                # pixel-samples of each task
+
+    @property
+    def balance(self) -> float:
+        """Most expensive task / mean task cost: 1.0 is a perfect split (0 for an empty plan)."""
+        total = sum(self.costs)
+        return max(self.costs) * len(self.costs) / total if total else 0.0
+
+    def to_dict(self) -> dict:
+        return {"groups": len(self.groups), "rects_per_group": [len(g) for g in self.groups],
+                "costs": self.costs, "balance": self.balance}
+
+
+def group_plan(rects: list[Rect], groups: int, render_cost: int) -> Grouping:
+    """Split ``rects`` into ``groups`` tile tasks of about equal cost."""
+    costs = [rect_cost(rect, render_cost) for rect in rects]
+    members = partition(costs, groups)
+    return Grouping(members, [sum(costs[i] for i in indices) for indices in members])
+
+
+def plan_group(rects: list[Rect], group: int, groups: int, render_cost: int) -> list[Rect]:
+    """The rectangles tile task ``group`` (1..groups, as the job template counts) renders."""
+    check_groups(groups)
+    if not 1 <= group <= groups:
+        raise InputError(f"--group must be between 1 and --groups {groups} (got {group})")
+    return [rects[index] for index in group_plan(rects, groups, render_cost).groups[group - 1]]

@@ -1,0 +1,116 @@
+"""``xsl-render farm SCENE.blend --bundle DIR``: an Open Job Description job bundle.
+
+Writes DIR/template.yaml (steps Maps, Tiles and Composite; see ``core.job_template``),
+DIR/parameter_values.yaml and our marker file. Submit DIR to a farm that speaks Open Job
+Description (``deadline bundle submit DIR`` on AWS Deadline Cloud), or run it here with
+``openjd run DIR/template.yaml -p SceneFile=SCENE.blend``. A bundle folder that exists and is
+not ours is refused.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from pathlib import Path
+
+from ...core.errors import InputError
+from .common import (add_map_arguments, add_tile_arguments, map_options_from_args,
+                     parse_resolution)
+
+NAME = "farm"
+HELP = "write an Open Job Description job bundle that renders the scene on a render farm"
+DEFAULT_TASKS_PER_FRAME = 4
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    parser.add_argument("--bundle", required=True, metavar="DIR", help="folder for the job bundle")
+    parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
+    parser.add_argument("--frames", metavar="START-END",
+                        help="frames to render: 12, 1-250 or 1-250:2 (default: the scene's range)")
+    parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
+    parser.add_argument("--max-spp", type=int,
+                        help="samples per pixel where the map is 1 (default: the scene's Cycles samples)")
+    parser.add_argument("--mode", choices=("xs", "xsl"), default="xsl",
+                        help="director map that plans the tiles (default xsl)")
+    parser.add_argument("--tasks-per-frame", type=int, default=DEFAULT_TASKS_PER_FRAME,
+                        help="tile tasks per frame, sharing its rectangles at about equal cost "
+                             f"(default {DEFAULT_TASKS_PER_FRAME})")
+    parser.add_argument("--output", metavar="DIR",
+                        help="where the job writes its frames (default: DIR/output of the bundle)")
+    parser.add_argument("--executable", metavar="PATH",
+                        help="the xsl-render command on the farm's machines (default: this one)")
+    add_map_arguments(parser)
+    add_tile_arguments(parser)
+
+
+def default_executable() -> str:
+    """The ``xsl-render`` console script of the environment running now."""
+    script = Path(sys.executable).with_name("xsl-render" + (".exe" if os.name == "nt" else ""))
+    if script.is_file():
+        return str(script.absolute())
+    return shutil.which("xsl-render") or "xsl-render"
+
+
+def _output(args, bundle: Path) -> str:
+    """The OutputDir value: relative to the bundle when inside it (a PATH default must be)."""
+    if args.output is None:
+        return "output"
+    output = Path(args.output).absolute()
+    try:
+        return output.relative_to(bundle.absolute()).as_posix() or "."
+    except ValueError:
+        return str(output)
+
+
+def tile_options(args, max_spp: int, resolution):
+    """``RenderOptions`` of the tile options with ``max_spp`` (the scene's samples unless given)."""
+    from ...core.render_options import RenderOptions
+
+    return RenderOptions(
+        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
+        resolution=resolution).check()
+
+
+def run(args) -> int:
+    from ...core.job_bundle import check_bundle_folder, write_bundle
+    from ...core.job_template import FarmJob, job_template, parameter_values, parse_frames
+    from ...core.task_groups import check_groups
+
+    # Everything that needs no scene first: a bad option fails before Blender loads.
+    map_options = map_options_from_args(args)
+    frames = parse_frames(args.frames) if args.frames is not None else None
+    resolution = parse_resolution(args.resolution)
+    check_groups(args.tasks_per_frame)
+    if args.max_spp is not None and args.max_spp < 1:
+        raise InputError(f"--max-spp must be at least 1 (got {args.max_spp})")
+    tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
+    bundle = check_bundle_folder(args.bundle)
+
+    from ...addon.blend_session import open_blend
+    from ...addon.scene_probe import camera_model, render_size
+
+    scene_path = Path(args.scene).absolute()
+    scene = open_blend(scene_path, args.scene_name)
+    camera_model(scene)                     # InputError for a scene without a camera
+    if frames is None:
+        frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
+    max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
+    options = tile_options(args, max_spp, resolution or render_size(scene))
+    job = FarmJob(scene=scene_path, scene_name=scene.name, frames=frames,
+                  output=_output(args, bundle), mode=args.mode, map_options=map_options,
+                  options=options, tasks_per_frame=args.tasks_per_frame,
+                  executable=args.executable or default_executable()).check()
+    write_bundle(bundle, job_template(job), parameter_values(job),
+                 {"scene": str(scene_path), "scene_name": scene.name, "frames": frames})
+    if scene.render.engine != "CYCLES":
+        print(f"xsl-render: warning: scene '{scene.name}' renders with {scene.render.engine}; "
+              "the farm job uses Cycles", file=sys.stderr)
+    width, height = options.resolution
+    print(f"wrote {bundle}/template.yaml and parameter_values.yaml: frames {frames}, "
+          f"{width}x{height}, {args.mode} up to {max_spp} spp, {args.tasks_per_frame} tile tasks "
+          f"per frame; run here with: openjd run {bundle}/template.yaml -p SceneFile={scene_path}"
+          + (f" -p OutputDir={job.output}" if Path(job.output).is_absolute() else ""))
+    return 0

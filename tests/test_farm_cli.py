@@ -1,0 +1,184 @@
+"""``xsl-render farm``: a job bundle that ``openjd`` validates and runs to the image of
+``xsl-render render``, resumes after a tile task is killed, and never overwrites a folder
+that is not ours."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from conftest import EXAMPLES
+from test_cli_info import one_line_error
+
+from xsl_render.core.farm_files import FrameFiles, read_record, valid_plan, valid_tile
+from xsl_render.core.imageio import read_image
+from xsl_render.core.job_template import openjd_values
+from xsl_render.core.task_groups import plan_group
+
+pytestmark = pytest.mark.blender
+
+ROAD = EXAMPLES / "road.blend"
+W, H = 96, 54
+# High enough a ceiling that a tile task takes a few tenths of a second: time to kill it.
+OPTIONS = ["--max-spp", "64", "--tile-size", "16", "--seed", "3", "--resolution", f"{W}x{H}"]
+OPENJD = Path(sys.executable).with_name("openjd")
+
+
+def openjd(*args, env: dict | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run([str(OPENJD), *map(str, args)], capture_output=True, text=True,
+                          env=env, timeout=timeout)
+
+
+def private_tmp(tmp_path: Path) -> dict:
+    """An environment whose temporary folder is the test's own: a killed task's leftovers
+    (its Cycles scratch folder, the openjd session folder) go with the test's files."""
+    folder = tmp_path / "tmp"
+    folder.mkdir(exist_ok=True)
+    return {**os.environ, "TMPDIR": str(folder)}
+
+
+def job_values(bundle: Path) -> str:
+    """The bundle's parameter_values.yaml as ``openjd run --job-param`` JSON."""
+    return json.dumps(openjd_values(yaml.safe_load((bundle / "parameter_values.yaml").read_text())))
+
+
+def tile_records(files: FrameFiles) -> list[Path]:
+    """The rectangles' records (not the temporaries of a write in progress: .name.*.partial.json)."""
+    return sorted(files.tiles.glob("[!.]*.json")) if files.tiles.is_dir() else []
+
+
+def render_ids(files: FrameFiles) -> dict[str, str]:
+    return {path.stem: read_record(path)["render_id"] for path in tile_records(files)}
+
+
+def kill_first_task_of_group(process: subprocess.Popen, files: FrameFiles, group: int) -> None:
+    """Wait until tile task ``group`` has written its first rectangle, then kill that task's
+    process (the xsl-render process the job started, by the id it recorded)."""
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        for path in tile_records(files):
+            record = read_record(path)
+            if record is not None and record.get("group") == group:
+                os.kill(record["pid"], signal.SIGKILL)
+                return
+        assert process.poll() is None, "the job ended before tile task 2 started"
+        time.sleep(0.005)
+    pytest.fail("tile task 2 never wrote a rectangle")
+
+
+@pytest.mark.render
+def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(cli, tmp_path):
+    scene_digest = hashlib.sha256(ROAD.read_bytes()).hexdigest()
+    bundle = tmp_path / "bundle"
+    result = cli("farm", ROAD, "--bundle", bundle, "--frames", "1", "--tasks-per-frame", "2", *OPTIONS)
+    assert result.returncode == 0, result.stderr
+    assert f"openjd run {bundle}/template.yaml -p SceneFile={ROAD}" in result.stdout
+    check = openjd("check", bundle / "template.yaml")
+    assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
+
+    # The whole job, with tile task 2 of 2 killed after its first rectangle.
+    files = FrameFiles(bundle / "output", 1)
+    log_path = tmp_path / "killed.log"
+    with open(log_path, "w") as log:
+        process = subprocess.Popen([str(OPENJD), "run", str(bundle / "template.yaml"), "-p", job_values(bundle)],
+                                   stdout=log, stderr=subprocess.STDOUT, env=private_tmp(tmp_path))
+        try:
+            kill_first_task_of_group(process, files, group=2)
+            assert process.wait(timeout=120) != 0           # the job failed with its task
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    plan = valid_plan(files)
+    groups = [plan_group(plan.plan.rects, g, 2, plan.options.render_cost) for g in (1, 2)]
+    finished = [[rect for rect in group if valid_tile(files, plan, rect)] for group in groups]
+    assert finished[0] == groups[0]                           # task 1 completed before
+    assert 1 <= len(finished[1]) < len(groups[1]), log_path.read_text()   # task 2 died midway
+    assert not files.image.exists()
+    before = render_ids(files)
+
+    # Rerun the job: only the rectangles task 2 never finished are rendered.
+    rerun = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
+    assert rerun.returncode == 0, rerun.stdout[-3000:]
+    out = rerun.stdout
+    missing = len(groups[1]) - len(finished[1])
+    assert "frame 1: maps and tile plan already done" in out
+    assert f"task 1/2: {len(groups[0])} rectangles, 0 rendered now, {len(groups[0])} already done" in out
+    assert f"task 2/2: {len(groups[1])} rectangles, {missing} rendered now, {len(finished[1])} already done" in out
+    after = render_ids(files)
+    rerendered = {name for name in after if before.get(name) != after[name]}
+    assert rerendered == {files.rect_name(rect) for rect in groups[1] if rect not in finished[1]}
+    assert out.count(" rendered r") == missing
+
+    # The same image as one `xsl-render render` process with the same options and seed.
+    reference = tmp_path / "render" / "xsl.exr"
+    result = cli("render", ROAD, "--mode", "xsl", "--frame", "1", "--out", reference, "--quiet", *OPTIONS)
+    assert result.returncode == 0, result.stderr
+    np.testing.assert_array_equal(read_image(files.image), read_image(reference))
+    np.testing.assert_array_equal(read_image(files.spp_image), read_image(reference.with_name("xsl_spp.exr")))
+    stats = json.loads(files.stats.read_text())
+    assert stats["renders"] == len(plan.plan.rects) and stats["grouping"]["groups"] == 2
+
+    # A damaged rectangle is rendered again (to the same pixels), and nothing else.
+    damaged = groups[0][0]
+    files.tile_image(damaged).write_bytes(files.tile_image(damaged).read_bytes()[:-64])
+    result = cli("farm-task", "tiles", ROAD, "--frame", "1", "--output", files.output,
+                 "--group", "1", "--groups", "2")
+    assert result.returncode == 0, result.stderr
+    assert f"{len(groups[0])} rectangles, 1 rendered now" in result.stdout
+    result = cli("farm-task", "composite", "--frame", "1", "--output", files.output)
+    assert result.returncode == 0 and "already done" in result.stdout, result.stdout + result.stderr
+    assert hashlib.sha256(ROAD.read_bytes()).hexdigest() == scene_digest     # never written
+
+
+def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, tmp_path):
+    foreign = tmp_path / "thesis"
+    foreign.mkdir()
+    (foreign / "chapter1.tex").write_text("precious")
+    result = cli("farm", ROAD, "--bundle", foreign)
+    assert result.returncode == 2
+    assert "is not an xsl-render job bundle" in one_line_error(result)
+    assert [p.name for p in foreign.iterdir()] == ["chapter1.tex"]
+
+    ours = tmp_path / "bundle"
+    for frames, tasks in (("1-3", "2"), ("2-4:2", "5")):
+        result = cli("farm", ROAD, "--bundle", ours, "--frames", frames, "--tasks-per-frame", tasks,
+                     "--mode", "xs", "--wl", "0.8", "--adaptive-threshold", "0.05")
+        assert result.returncode == 0, result.stderr
+    values = openjd_values(yaml.safe_load((ours / "parameter_values.yaml").read_text()))
+    assert values["Frames"] == "2-4:2" and values["TasksPerFrame"] == 5 and values["Mode"] == "xs"
+    assert values["MaxSpp"] == 64                     # the scene's own Cycles samples
+    assert values["Resolution"] == "512x288" and values["AdaptiveThreshold"] == "0.05"
+    assert values["SceneFile"] == str(ROAD) and "OutputDir" not in values
+    assert Path(values["XslRender"]).name.startswith("xsl-render")
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--tasks-per-frame", "0"], "--tasks-per-frame"),
+    (["--frames", "9-1"], "--frames"),
+    (["--max-spp", "0"], "--max-spp"),
+    (["--tile-size", "4"], "--tile-size"),
+    (["--wx", "0", "--ws", "0"], "cannot both be 0"),
+])
+def test_bad_options_exit_2_before_anything_is_written(cli, tmp_path, args, message):
+    result = cli("farm", ROAD, "--bundle", tmp_path / "bundle", *args)
+    assert result.returncode == 2
+    assert message in one_line_error(result)
+    assert not (tmp_path / "bundle").exists()
+
+
+def test_scene_without_camera_is_refused(cli, blender, tmp_path):
+    blender.ops.wm.read_factory_settings(use_empty=True)
+    path = tmp_path / "empty.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(path))
+    result = cli("farm", path, "--bundle", tmp_path / "bundle")
+    assert result.returncode == 2 and "no active camera" in one_line_error(result)
+    assert not (tmp_path / "bundle").exists()

@@ -1,0 +1,255 @@
+"""The farm job without Blender: task groups, the job template, bundle folders, task records
+and the composite step."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from openjd.model import (StepParameterSpaceIterator, create_job, decode_job_template,
+                          preprocess_job_parameters)
+
+from xsl_render.core.errors import InputError
+from xsl_render.core.farm_composite import composite_frame
+from xsl_render.core.farm_files import (FrameFiles, maps_inputs, read_tile, tile_inputs,
+                                        valid_plan, valid_tile, write_plan_record, write_tile)
+from xsl_render.core.imageio import read_image, write_exr
+from xsl_render.core.job_bundle import MARKER, check_bundle_folder, write_bundle
+from xsl_render.core.job_template import (FarmJob, job_template, openjd_values, parameter_values,
+                                          parse_frames)
+from xsl_render.core.map_options import MapOptions
+from xsl_render.core.render_options import RenderOptions
+from xsl_render.core.task_groups import group_plan, partition, plan_group
+from xsl_render.core.tile_plan import make_plan
+
+
+def random_plan(seed: int, width=96, height=54, tile=16):
+    rng = np.random.default_rng(seed)
+    director = rng.random((height, width)).astype(np.float32) ** 3
+    return make_plan(director, RenderOptions(max_spp=64, tile_size=tile, resolution=(width, height)))
+
+
+# -- task groups ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("groups", [1, 2, 3, 7, 40])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_groups_cover_every_rectangle_once_at_about_equal_cost(groups, seed):
+    plan = random_plan(seed)
+    grouping = group_plan(plan.rects, groups, render_cost=1024)
+    owned = sorted(i for members in grouping.groups for i in members)
+    assert owned == list(range(len(plan.rects)))
+    costs = [rect.samples + 1024 for rect in plan.rects]
+    assert grouping.costs == [sum(costs[i] for i in members) for members in grouping.groups]
+    # LPT: no task costs more than the mean plus the largest single rectangle, and at most
+    # 4/3 of the best possible split (which is at least the mean and the largest rectangle).
+    lower = max(sum(costs) / groups, max(costs))
+    assert max(grouping.costs) <= sum(costs) / groups + max(costs)
+    assert max(grouping.costs) <= 4 / 3 * lower + 1e-9
+    # Every task renders its share of the plan, and all together render the plan.
+    shares = [plan_group(plan.rects, g, groups, 1024) for g in range(1, groups + 1)]
+    assert sorted((r.row0, r.col0) for share in shares for r in share) == \
+        sorted((r.row0, r.col0) for r in plan.rects)
+
+
+def test_grouping_is_deterministic_and_empty_groups_are_no_ops():
+    costs = [5, 5, 5, 1, 9, 9]
+    assert partition(costs, 4) == partition(list(costs), 4) == [[4], [5], [0, 2], [1, 3]]
+    assert partition([3, 2], 4) == [[0], [1], [], []]
+    assert partition([], 3) == [[], [], []]
+    assert group_plan([], 3, 1024).balance == 0.0
+
+
+def test_balance_on_many_small_rectangles_is_close_to_perfect():
+    plan = random_plan(3, width=256, height=144, tile=8)
+    assert len(plan.rects) > 100
+    assert group_plan(plan.rects, 4, 1024).balance < 1.05
+
+
+@pytest.mark.parametrize("group,groups,message", [(0, 3, "--group"), (4, 3, "--group"),
+                                                  (1, 0, "--tasks-per-frame"), (1, 10001, "--tasks-per-frame")])
+def test_bad_group_numbers(group, groups, message):
+    with pytest.raises(InputError, match=message):
+        plan_group(random_plan(0).rects, group, groups, 1024)
+
+
+# -- frames and the job template ----------------------------------------------------------------
+
+@pytest.mark.parametrize("text,expected", [("12", "12"), ("1-250", "1-250"), ("1-250:2", "1-250:2"),
+                                           ("5-5", "5"), (" 3-9:1 ", "3-9"), ("-3-2", "-3-2")])
+def test_parse_frames(text, expected):
+    assert parse_frames(text) == expected
+
+
+@pytest.mark.parametrize("text", ["", "a-b", "1..5", "9-3", "1-5:0", "1-"])
+def test_parse_frames_refuses(text):
+    with pytest.raises(InputError, match="--frames"):
+        parse_frames(text)
+
+
+def farm_job(tmp_path: Path, **changes) -> FarmJob:
+    values = dict(scene=tmp_path / "scene.blend", scene_name="Scene", frames="1-3", output="output",
+                  mode="xsl", map_options=MapOptions(light_n=3),
+                  options=RenderOptions(max_spp=32, tile_size=16, seed=7, adaptive_threshold=0.02,
+                                        resolution=(96, 54)),
+                  tasks_per_frame=4, executable="/opt/xsl/bin/xsl-render")
+    values.update(changes)
+    return FarmJob(**values)
+
+
+def test_template_is_valid_open_job_description_and_static(tmp_path):
+    job = farm_job(tmp_path)
+    template = decode_job_template(template=job_template(job))
+    values = openjd_values(parameter_values(job))
+    assert "OutputDir" not in values                  # relative: the template default applies
+    params = preprocess_job_parameters(job_template=template, job_parameter_values=values,
+                                       job_template_dir=tmp_path, current_working_dir=tmp_path)
+    assert params["OutputDir"].value == str(tmp_path / "output")
+    job_model = create_job(job_template=template, job_parameter_values=params)
+    steps = {step.name: step for step in job_model.steps}
+    assert list(steps) == ["Maps", "Tiles", "Composite"]
+    tasks = {name: list(StepParameterSpaceIterator(space=step.parameterSpace))
+             for name, step in steps.items()}
+    assert [t["Frame"].value for t in tasks["Maps"]] == ["1", "2", "3"]
+    assert len(tasks["Tiles"]) == 3 * 4                   # Frame x Group, Group = 1..4
+    assert sorted({t["Group"].value for t in tasks["Tiles"]}) == ["1", "2", "3", "4"]
+    assert [d.dependsOn for d in steps["Tiles"].dependencies] == ["Maps"]
+    assert sorted(d.dependsOn for d in steps["Composite"].dependencies) == ["Maps", "Tiles"]
+    maps_args = [str(a) for a in template.steps[0].script.actions.onRun.args]
+    for flag in ("--max-spp", "--seed", "--adaptive-threshold", "--light-n", "--minbound-value",
+                 "--tile-size", "--resolution", "--scene-name", "--mode"):
+        assert flag in maps_args
+    defaults = {p.name: p.default for p in template.parameterDefinitions}
+    assert defaults["XslRender"] == "/opt/xsl/bin/xsl-render" and defaults["LightN"] == "3"
+    assert defaults["AdaptiveThreshold"] == "0.02" and defaults["Resolution"] == "96x54"
+    assert "SceneFile" not in defaults or defaults["SceneFile"] is None
+
+
+def test_parameter_values_override_and_an_absolute_output_has_no_default(tmp_path):
+    job = farm_job(tmp_path, output=str(tmp_path / "renders"), frames="10")
+    data = job_template(job)
+    output = next(p for p in data["parameterDefinitions"] if p["name"] == "OutputDir")
+    assert "default" not in output
+    values = openjd_values(parameter_values(job))
+    assert values["OutputDir"] == str(tmp_path / "renders") and values["Frames"] == "10"
+    template = decode_job_template(template=data)
+    params = preprocess_job_parameters(job_template=template, job_parameter_values={**values, "MaxSpp": 8},
+                                       job_template_dir=tmp_path, current_working_dir=tmp_path)
+    assert params["MaxSpp"].value == "8"
+
+
+@pytest.mark.parametrize("changes,message", [
+    ({"mode": "gold"}, "--mode"), ({"tasks_per_frame": 0}, "--tasks-per-frame"),
+    ({"frames": "4-1"}, "--frames"), ({"map_options": MapOptions(wx=-1)}, "--wx"),
+])
+def test_bad_farm_jobs(tmp_path, changes, message):
+    with pytest.raises(InputError, match=message):
+        job_template(farm_job(tmp_path, **changes))
+
+
+# -- the bundle folder --------------------------------------------------------------------------
+
+def test_bundle_folder_must_be_new_empty_or_ours(tmp_path):
+    assert check_bundle_folder(tmp_path / "new") == tmp_path / "new"
+    (tmp_path / "empty").mkdir()
+    check_bundle_folder(tmp_path / "empty")
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("precious")
+    with pytest.raises(InputError, match="not an xsl-render job bundle"):
+        check_bundle_folder(foreign)
+    with pytest.raises(InputError, match="not an xsl-render job bundle"):
+        write_bundle(foreign, {}, {}, {})
+    assert sorted(p.name for p in foreign.iterdir()) == ["thesis.tex"]
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="not a folder"):
+        check_bundle_folder(tmp_path / "file")
+    job = farm_job(tmp_path)
+    written = write_bundle(tmp_path / "ours", job_template(job), parameter_values(job), {"frames": "1-3"})
+    assert sorted(p.name for p in written) == sorted([MARKER, "template.yaml", "parameter_values.yaml"])
+    (tmp_path / "ours" / "output").mkdir()
+    write_bundle(tmp_path / "ours", job_template(job), parameter_values(job), {})      # ours: rewritten
+    loaded = yaml.safe_load((tmp_path / "ours" / "parameter_values.yaml").read_text())
+    assert {"name": "TasksPerFrame", "value": 4} in loaded["parameterValues"]
+    assert yaml.safe_load((tmp_path / "ours" / "template.yaml").read_text()) == job_template(job)
+
+
+# -- task records and the composite -------------------------------------------------------------
+
+def planned_frame(tmp_path: Path, options=None, scene_digest="a" * 64):
+    """A frame whose maps step is done: a director map file and plan.json."""
+    options = options or RenderOptions(max_spp=16, tile_size=16, resolution=(48, 32), denoise=False)
+    files = FrameFiles(tmp_path / "output", 3)
+    rng = np.random.default_rng(5)
+    director = rng.random((32, 48)).astype(np.float32)
+    write_exr(files.maps / "xsl.exr", director, ["Y"])
+    inputs = maps_inputs(scene_digest, "Scene", 3, "xsl", MapOptions().to_dict(), options)
+    write_plan_record(files, inputs, make_plan(director, options), files.maps / "xsl.exr",
+                      {"seconds": {"total": 0.5}})
+    return files, inputs
+
+
+def fake_render(files, record, rect, value):
+    pixels = np.full((rect.height, rect.width, 4), value, np.float32)
+    return write_tile(files, record, rect, pixels, rect.spp, {"seconds": 0.01, "group": 1})
+
+
+def test_plan_record_is_valid_only_for_its_inputs_and_intact_map(tmp_path):
+    files, inputs = planned_frame(tmp_path)
+    assert valid_plan(files, inputs) is not None
+    assert valid_plan(files, {**inputs, "frame": 4}) is None
+    with open(files.maps / "xsl.exr", "r+b") as stream:          # a damaged map
+        stream.seek(-8, 2)
+        stream.write(b"\0" * 8)
+    assert valid_plan(files, inputs) is None
+    with pytest.raises(InputError, match="run the maps step first"):
+        composite_frame(files)
+
+
+def test_tile_records_reject_missing_stale_and_damaged_images(tmp_path):
+    files, inputs = planned_frame(tmp_path)
+    record = valid_plan(files, inputs)
+    rect = record.plan.rects[0]
+    assert valid_tile(files, record, rect) is None                         # never rendered
+    fake_render(files, record, rect, 0.25)
+    assert valid_tile(files, record, rect)["group"] == 1
+    pixels, samples, guides = read_tile(files, rect)
+    assert guides is None
+    assert (pixels == 0.25).all() and (samples == rect.spp).all()
+    other = planned_frame(tmp_path / "other", RenderOptions(max_spp=16, tile_size=16, seed=1,
+                                                            resolution=(48, 32)))[0]
+    other_record = valid_plan(other)
+    assert tile_inputs(other_record, rect) != tile_inputs(record, rect)    # the seed decides pixels
+    files.tile_image(rect).write_bytes(files.tile_image(rect).read_bytes()[:-10])   # truncated
+    assert valid_tile(files, record, rect) is None
+    fake_render(files, record, rect, 0.25)
+    files.tile_record(rect).unlink()                                      # killed before its record
+    assert valid_tile(files, record, rect) is None
+
+
+def test_composite_assembles_checks_and_skips_when_current(tmp_path):
+    files, inputs = planned_frame(tmp_path)
+    record = valid_plan(files, inputs)
+    rects = record.plan.rects
+    for index, rect in enumerate(rects[:-1]):
+        fake_render(files, record, rect, float(index))
+    with pytest.raises(InputError, match=f"1 of {len(rects)} rectangles have no finished render"):
+        composite_frame(files, groups=2)
+    assert not files.image.exists()
+    fake_render(files, record, rects[-1], float(len(rects) - 1))
+    result = composite_frame(files, groups=2)
+    assert not result.skipped
+    image = read_image(files.image)
+    spp = read_image(files.spp_image)[:, :, 0]
+    for index, rect in enumerate(rects):
+        assert (image[rect.row0:rect.row1, rect.col0:rect.col1] == float(index)).all()
+        assert (spp[rect.row0:rect.row1, rect.col0:rect.col1] == rect.spp).all()
+    stats = json.loads(files.stats.read_text())
+    assert stats["total_samples"] == record.plan.total_samples and stats["renders"] == len(rects)
+    assert stats["grouping"]["groups"] == 2 and stats["phases_s"]["maps"] == 0.5
+    assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
+    assert composite_frame(files, groups=2).skipped
+    fake_render(files, record, rects[0], 9.0)                              # a rectangle changed
+    result = composite_frame(files)
+    assert not result.skipped and (read_image(files.image)[rects[0].row0, rects[0].col0] == 9.0).all()
