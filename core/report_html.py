@@ -70,7 +70,11 @@ def build_report(results: dict, out_dir: Path) -> str:
             "Times as in the paper's Fig. 8: a selective render's time includes making the maps it "
             "uses. The equal-time baselines get the wall time of the XSL run, maps included. Wall "
             "times (and so speedups) depend on what else the machine was doing; sample ratios "
-            "do not.</p>")
+            "do not. "
+            + ("Every frame, the gold standard's too, was denoised with Open Image Denoise "
+               "(albedo and normal guided) before it was compared." if settings.get("denoise", False)
+               else "No frame was denoised: the raw path-traced frames are compared.")
+            + "</p>")
     vdp_line = ("VDP: ColorVideoVDP, probability of detection per pixel." if vdp.get("ran")
                 else f"VDP skipped: {escape(str(vdp.get('skipped')))}")
     body = [

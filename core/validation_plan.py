@@ -136,7 +136,8 @@ class ValidationSettings:
     ``resolution`` renders every scene at that size; else ``longest_side`` scales each scene's
     own resolution to that many pixels on its longer side (the paper's "512 pixels in their
     largest side"); with neither, each scene renders at its own. ``vdp`` False reports VDP as
-    skipped (it is slow, and optional anyway).
+    skipped (it is slow, and optional anyway). ``denoise`` denoises every finished frame, gold
+    and the others alike (``RenderOptions.denoise``).
     """
 
     max_spp: int = 16
@@ -146,6 +147,7 @@ class ValidationSettings:
     tile_size: int = 32
     seed: int = 0
     vdp: bool = True
+    denoise: bool = True
     variants: tuple[str, ...] = DEFAULT_VARIANTS
 
     def render_options(self, max_spp: int | None = None):
@@ -156,10 +158,10 @@ class ValidationSettings:
             raise InputError(f"--size must be between 8 and 16384 pixels (got {self.longest_side})")
         return RenderOptions(max_spp=max_spp or self.max_spp, min_spp=self.min_spp,
                              tile_size=self.tile_size, seed=self.seed,
-                             resolution=self.resolution).check()
+                             resolution=self.resolution, denoise=self.denoise).check()
 
     def to_dict(self) -> dict:
         return {"max_spp": self.max_spp, "resolution": list(self.resolution) if self.resolution else None,
                 "longest_side": self.longest_side,
                 "min_spp": self.min_spp, "tile_size": self.tile_size, "seed": self.seed,
-                "vdp": self.vdp, "variants": list(self.variants)}
+                "vdp": self.vdp, "denoise": self.denoise, "variants": list(self.variants)}

@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .experiment import run_and_report
+from .experiment import add_quality_arguments, run_and_report
 
 NAME = "demo"
 HELP = ("the main job: maps, XSL and gold renders of the bundled road scene, comparison, and an "
@@ -31,8 +31,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--full", action="store_true",
                         help="every version of the paper (X only, S only, XS, XSL with and without "
                              "MinBound) plus the equal-time baselines, at 16 and at 64 spp")
-    parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
-                        help="run ColorVideoVDP when it is installed (default on)")
+    add_quality_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     # For tests and quick looks: a smaller frame, another ceiling, another scene.
     parser.add_argument("--resolution", help=argparse.SUPPRESS)
@@ -51,7 +50,7 @@ def run(args) -> int:
     path = check_blend_file(args.scene if args.scene else example_scene_path(SCENE))
     ceilings = (args.max_spp,) if args.max_spp else (FULL_CEILINGS if args.full else FULL_CEILINGS[:1])
     settings = ValidationSettings(max_spp=ceilings[0], resolution=parse_resolution(args.resolution),
-                                  vdp=args.vdp, variants=DEFAULT_VARIANTS if args.full else QUICK_VARIANTS)
+                                  vdp=args.vdp, denoise=args.denoise, variants=DEFAULT_VARIANTS if args.full else QUICK_VARIANTS)
     for ceiling in ceilings:        # InputError for impossible options, before any work
         settings.render_options(ceiling)
     out = check_output_folder(args.out)

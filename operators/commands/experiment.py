@@ -43,6 +43,14 @@ def add_run_arguments(parser, max_spp: int = 16, help_suffix: str = "") -> None:
     parser.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
     parser.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
     parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    add_quality_arguments(parser)
+
+
+def add_quality_arguments(parser) -> None:
+    """--denoise and --vdp, shared with ``demo``."""
+    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                        help="denoise every finished frame with Open Image Denoise, gold and "
+                             "selective alike (default on; off compares the raw path-traced frames)")
     parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
                         help="run ColorVideoVDP when it is installed (default on; it is slow)")
 
@@ -54,7 +62,8 @@ def settings_from_args(args, variants=None):
     settings = ValidationSettings(
         max_spp=args.max_spp, resolution=parse_resolution(args.resolution),
         longest_side=args.size, min_spp=args.min_spp, tile_size=args.tile_size, seed=args.seed,
-        vdp=args.vdp, variants=variants or parse_variants(getattr(args, "variants", None)))
+        vdp=args.vdp, denoise=args.denoise,
+        variants=variants or parse_variants(getattr(args, "variants", None)))
     settings.render_options()       # InputError for impossible options, before any work
     return settings
 
