@@ -162,6 +162,7 @@ def test_demo_end_to_end(tmp_path):
     (("experiment", "--variants", "gold,bogus"), "unknown variant 'bogus'"),
     (("experiment", "--size", "2"), "--size must be between"),
     (("experiment", "--resolution", "12by4"), "--resolution must look like"),
+    (("experiment", "--resolution", "64x36", "--size", "64"), "not both"),
     (("demo", "--scene", "README.md"), "not a .blend file"),
 ])
 def test_bad_input_is_one_line(args, message):

@@ -59,6 +59,10 @@ def settings_from_args(args, variants=None):
     from ...core.validation_plan import ValidationSettings, parse_variants
     from .common import parse_resolution
 
+    if args.resolution and args.size:
+        from ...core.errors import InputError
+
+        raise InputError("give --resolution or --size, not both")
     settings = ValidationSettings(
         max_spp=args.max_spp, resolution=parse_resolution(args.resolution),
         longest_side=args.size, min_spp=args.min_spp, tile_size=args.tile_size, seed=args.seed,
