@@ -102,7 +102,11 @@ def _metric(run: dict, metric: str, key: str, digits: int = 2, suffix: str = "%"
     if summary.get("skipped"):
         return f"<td class=skip title='{escape(summary['skipped'], quote=True)}'>skipped</td>"
     value = summary.get(key)
-    return "<td class=skip>-</td>" if value is None else f"<td>{value:.{digits}f}{suffix}</td>"
+    if value is None:
+        return "<td class=skip>-</td>"
+    # Small errors keep three significant digits (0.0042%, not 0.00%).
+    text = f"{value:.{digits}f}" if abs(value) >= 10 ** (1 - digits) or value == 0 else f"{value:.3g}"
+    return f"<td>{text}{suffix}</td>"
 
 
 def _paper_tables(scenes: dict) -> str:
