@@ -31,11 +31,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def add_run_arguments(parser, max_spp: int = 16, help_suffix: str = "") -> None:
-    """Options shared with ``demo``: ceiling, resolution, tiles, seed, VDP."""
-    parser.add_argument("--max-spp", type=int, default=max_spp,
-                        help=f"samples per pixel of the gold standard and ceiling of the maps "
-                             f"(default {max_spp}, the paper's){help_suffix}")
+def add_run_arguments(parser) -> None:
+    """Ceiling, size, tiles, seed, denoising, VDP."""
+    parser.add_argument("--max-spp", type=int, default=16,
+                        help="samples per pixel of the gold standard and ceiling of the maps "
+                             "(default 16, the paper's)")
     parser.add_argument("--resolution", metavar="WxH", help="render every scene at this size")
     parser.add_argument("--size", type=int, metavar="N",
                         help="scale each scene to N pixels on its longer side (the paper: 512; "
