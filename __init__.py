@@ -1,8 +1,9 @@
 """XSL Render: perceptual selective rendering of participating media with Cycles.
 
 Implements Sundstedt, Gutierrez, Anson, Banterle and Chalmers, "Perceptual Rendering of
-Participating Media" (ACM TAP 4(3), 2007). This file only registers the add-on; the
-bpy-free engine is in ``core``, the Blender side in ``addon`` and ``operators``.
+Participating Media" (ACM TAP 4(3), 2007). This file only registers the add-on and offers
+the batch entry; the bpy-free engine is in ``core``, the Blender side in ``addon`` and
+``operators``.
 """
 
 
@@ -19,3 +20,14 @@ def unregister():
 
     operators.unregister()
     addon.unregister()
+
+
+def batch(argv=None) -> int:
+    """``xsl-render`` commands on the file ``blender -b`` has open (``operators/batch.py``):
+
+        blender -b scene.blend --python-expr "import bl_ext.user_default.xsl_render as x; x.batch()" \\
+            -- render --mode xsl --max-spp 16 --out out.exr
+    """
+    from .operators.batch import batch as run
+
+    return run(argv)

@@ -1,17 +1,34 @@
-"""The Blender side that is not an operator: scene probing, the Cycles driver, state."""
+"""The Blender side that is not an operator: scene probing, the Cycles driver, state, and
+the panel (properties, preferences, ui).
 
-_CLASSES: list = []
+``register()`` imports the bpy modules only when Blender registers the add-on, so the
+command line can import ``addon`` helpers without the panel's classes.
+"""
+
+_registered: list = []
 
 
 def register():
     import bpy
 
-    for cls in _CLASSES:
+    from . import preferences, properties, ui
+
+    # Preferences first: the scene settings take their defaults from them.
+    bpy.utils.register_class(preferences.XSL_AP_preferences)
+    settings = properties.make_settings_class(preferences.default_values())
+    for cls in (properties.XSL_PG_status, settings, *ui.CLASSES):
         bpy.utils.register_class(cls)
+    bpy.types.Scene.xsl_render = bpy.props.PointerProperty(
+        type=settings, name="XSL Render", description="Perceptual selective rendering settings")
+    bpy.types.WindowManager.xsl_render_status = bpy.props.PointerProperty(type=properties.XSL_PG_status)
+    _registered[:] = [preferences.XSL_AP_preferences, properties.XSL_PG_status, settings, *ui.CLASSES]
 
 
 def unregister():
     import bpy
 
-    for cls in reversed(_CLASSES):
+    del bpy.types.WindowManager.xsl_render_status
+    del bpy.types.Scene.xsl_render
+    for cls in reversed(_registered):
         bpy.utils.unregister_class(cls)
+    _registered.clear()

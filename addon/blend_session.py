@@ -44,14 +44,18 @@ def check_blend_file(path: str | Path) -> Path:
     return path
 
 
-def open_blend(path: str | Path, scene_name: str | None = None):
+def open_blend(path: str | Path | None, scene_name: str | None = None):
     """Load a .blend into the running bpy session and return its scene.
 
     ``scene_name`` picks a scene; the default is the one the file was saved with.
-    The file on disk is never written: nothing in xsl_render calls save_mainfile.
+    ``path`` None: the file Blender already has open (the batch entry inside
+    ``blender -b scene.blend``). The file on disk is never written: nothing in xsl_render
+    calls save_mainfile.
     """
     import bpy
 
+    if path is None:
+        return _open_scene(scene_name)
     path = check_blend_file(path).resolve()
     try:
         bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
@@ -63,5 +67,20 @@ def open_blend(path: str | Path, scene_name: str | None = None):
     scene = bpy.data.scenes.get(scene_name)
     if scene is None:
         raise InputError(f"{path} has no scene named '{scene_name}' "
+                         f"(it has: {', '.join(s.name for s in bpy.data.scenes)})")
+    return scene
+
+
+def _open_scene(scene_name: str | None):
+    import bpy
+
+    if scene_name is None:
+        scene = bpy.context.scene
+        if scene is None:
+            raise InputError("Blender has no scene open")
+        return scene
+    scene = bpy.data.scenes.get(scene_name)
+    if scene is None:
+        raise InputError(f"the open file has no scene named '{scene_name}' "
                          f"(it has: {', '.join(s.name for s in bpy.data.scenes)})")
     return scene

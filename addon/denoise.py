@@ -11,6 +11,12 @@ Blender exposes OIDN through the compositor's Denoise node, so the frame goes th
 temporary scene whose compositor reads the image, albedo and normal and denoises them;
 the scene, its node tree and the images are removed afterwards. The user's scene is not
 touched.
+
+Prefilter "Fast": the albedo and normal guides are taken as they are rather than denoised
+first. Measured on the road at 512x288 from 4 samples, against a denoised 64-sample
+frame: Fast 0.25 s for mean FLIP 0.042, Accurate (Cycles' default) 1.6 s for 0.038, no
+guides 0.25 s for 0.042 but softer edges on textured surfaces. A second and a half per
+frame would weigh on every selective render's speedup.
 """
 from __future__ import annotations
 
@@ -83,12 +89,12 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
             output = tree.nodes.new("CompositorNodeComposite")
         denoiser = tree.nodes.new("CompositorNodeDenoise")
         _set_input(denoiser, "HDR", True)
-        _set_input(denoiser, "Prefilter", "Accurate")
+        _set_input(denoiser, "Prefilter", "Fast")
         _set_input(denoiser, "Quality", "High")
         if hasattr(denoiser, "use_hdr"):
             denoiser.use_hdr = True
         if hasattr(denoiser, "prefilter"):
-            denoiser.prefilter = "ACCURATE"
+            denoiser.prefilter = "FAST"
         for socket, pixels, non_color in (("Image", rgba, False), ("Albedo", albedo, False),
                                           ("Normal", normal, True)):
             if pixels is None:

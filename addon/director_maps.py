@@ -3,7 +3,8 @@ and XSL (4.5). The Blender side of ``xsl-render maps``, the panel and the render
 
 Data flows one way: the scene is read into plain data (camera, media, lights, rays,
 snapshot), the maps are computed by ``core`` functions, and nothing is written back. The
-frame and resolution are set inside ``preserved_scene`` and restored afterwards.
+frame and resolution are set inside ``preserved_scene`` and restored afterwards. ``map_steps`` is the same computation as steps, so that the
+Blender panel can run it from a modal operator one map at a time.
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from ..core.light_map import light_map as glow_map
 from ..core.light_raster import emission_footprints, lamp_footprints, merge_footprints
 from ..core.map_files import MapSet
 from ..core.map_options import MapOptions
+from ..core.progress import ProgressCallback, Steps, run_steps
 from ..core.saliency_input import modulated_saliency_map
 from ..core.scene_model import luminance
 from ..core.transmittance import transmittance_along_rays
@@ -29,7 +31,6 @@ from .snapshot import render_snapshot
 from .xmap import XMapResult, compute_x_map_detailed
 
 NO_LIGHTS_WARNING = "no light source shows in the frame: the L map is 0 everywhere"
-Progress = Callable[[float, str], None]
 
 
 class MapWarning(UserWarning):
@@ -37,7 +38,7 @@ class MapWarning(UserWarning):
 
 
 def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int] | None = None,
-                 frame: int | None = None, cache_dir=None, progress: Progress | None = None,
+                 frame: int | None = None, cache_dir=None, progress: ProgressCallback | None = None,
                  depsgraph=None) -> MapSet:
     """Compute every map for the scene's active camera.
 
@@ -48,12 +49,18 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
     size : (width, height) to compute at instead of the render resolution
     frame : frame to evaluate instead of the current one
     cache_dir : folder for the ray cache (instant X recomputation when only media change)
-    progress : called with (fraction done, message)
+    progress : called with (fraction done, message); returning True cancels between maps
     """
+    return run_steps(map_steps(scene, options, size, frame, cache_dir, depsgraph), progress)
+
+
+def map_steps(scene, options: MapOptions | None = None, size: tuple[int, int] | None = None,
+              frame: int | None = None, cache_dir=None, depsgraph=None) -> Steps[MapSet]:
+    """``compute_maps`` as steps (``core.progress``): yields before each map, returns the
+    ``MapSet``. Closing it between two steps restores the scene."""
     import bpy
 
     options = (options or MapOptions()).validate()
-    report = progress or (lambda fraction, message: None)
     seconds: dict[str, float] = {}
     notes: list[str] = []
     with preserved_scene(scene):
@@ -65,7 +72,7 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
         depsgraph = bpy.context.evaluated_depsgraph_get() if depsgraph is None or frame is not None else depsgraph
         camera = camera_model(scene)
 
-        report(0.0, "X map and Z buffer")
+        yield 0.0, "X map and Z buffer"
         tick = time.perf_counter()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -74,17 +81,17 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
         notes += [str(w.message) for w in caught]
         seconds["x"] = time.perf_counter() - tick
 
-        report(0.3, "snapshot (direct light, no media)")
+        yield 0.3, "snapshot (direct light, no media)"
         tick = time.perf_counter()
         snapshot = render_snapshot(scene)
         seconds["snapshot"] = time.perf_counter() - tick
 
-        report(0.6, "S map (saliency)")
+        yield 0.6, "S map (saliency)"
         tick = time.perf_counter()
         s = modulated_saliency_map(snapshot.combined[..., :3], xres.x)
         seconds["s"] = time.perf_counter() - tick
 
-        report(0.75, "L map (lights)")
+        yield 0.75, "L map (lights)"
         tick = time.perf_counter()
         lights = [light for light in find_lights(scene, depsgraph, camera) if light.in_frame]
         l_map, light_info = light_map(camera, lights, xres, snapshot.emission, options)
@@ -99,7 +106,7 @@ def compute_maps(scene, options: MapOptions | None = None, size: tuple[int, int]
         xsl = xsl_map(xs, l_map, options.wxs, options.wl, options.xsl_op)
         seconds["xsl"] = time.perf_counter() - tick
         frame_done = scene.frame_current
-    report(1.0, "maps done")
+    yield 1.0, "maps done"
     for note in dict.fromkeys(notes):
         warnings.warn(note, MapWarning, stacklevel=2)
     seconds["total"] = sum(seconds.values())

@@ -127,7 +127,8 @@ def preserved_scene(scene):
     Restores: scene, render, image, colour-management, Cycles and view-layer settings
     (frame, camera, world, engine, samples, border, output path, persistent data, passes,
     volume flags, material override), material slot assignments and object render
-    visibility; removes datablocks the block created (unless kept).
+    visibility, and the animated values of the scene's frame when the block changed the
+    frame; removes datablocks the block created (unless kept).
     """
     import bpy
 
@@ -138,12 +139,19 @@ def preserved_scene(scene):
     before = {name: set(item.as_pointer() for item in getattr(bpy.data, name))
               for name in _DATA_COLLECTIONS}
     state = SceneState(scene)
+    frame = (scene.frame_current, scene.frame_subframe)
     try:
         yield state
     finally:
+        moved = (scene.frame_current, scene.frame_subframe) != frame
         # Settings first: they matter most and cannot fail as a whole.
         for name, struct in structs.items():
             restore_values(struct, saved[name])
+        if moved:
+            # Setting frame_current back does not re-evaluate the animation: the animated
+            # values (fog density, lamp energy...) would keep the later frame's until the
+            # next update. frame_set evaluates them at the scene's own frame again.
+            scene.frame_set(frame[0], subframe=frame[1])
         for ob, entries in slots.items():
             _restore_slots(ob, entries)
         for ob, value in hidden.items():

@@ -3,7 +3,8 @@
 ``render_selective(scene, director_map, options)`` is the core: the director map (values in
 [0, 1] at render resolution) scales ``options.max_spp`` per pixel; ``core.tile_plan`` turns
 that into rectangles, each rendered by Cycles with its own samples, and ``core.composite``
-puts them together. The baselines:
+puts them together (``selective_steps`` is the same run as steps, for the Blender panel's
+modal operator). The baselines:
 
 - ``render_gold``: ``max_spp`` everywhere, one ordinary Cycles render (the gold standard);
 - ``render_uniform``: one ordinary render with the same total samples as a selective run
@@ -25,7 +26,7 @@ import numpy as np
 
 from ..core.composite import Compositor, crop, render_window
 from ..core.errors import InputError
-from ..core.progress import Progress, ProgressCallback, TileProgress
+from ..core.progress import Progress, ProgressCallback, Steps, TileProgress, run_steps
 from ..core.render_options import RenderOptions
 from ..core.tile_plan import Rect, check_director_map, make_plan
 from .scene_probe import camera_model, render_size
@@ -156,21 +157,29 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
     map_seconds
         Time already spent making the map, recorded as the "maps" phase.
     """
-    report = Progress(progress)
+    return run_steps(selective_steps(scene, director_map, options, mode, map_seconds), progress)
+
+
+def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mode: str = "xsl",
+                    map_seconds: float = 0.0) -> Steps[RenderOutcome]:
+    """``render_selective`` as steps (``core.progress``): yields before and after every tile
+    render, returns the ``RenderOutcome``. Closing it between two steps restores the scene."""
     with preserved_scene(scene):
         width, height, warnings = prepare_render(scene, options)
         started = time.perf_counter()
         data = check_director_map(director_map, width, height)
         plan = make_plan(data, options)
         phases = {"maps": map_seconds, "plan": time.perf_counter() - started}
-        tracker = TileProgress(report, [rect.samples for rect in plan.rects], options.render_cost)
+        tracker = TileProgress(Progress(), [rect.samples for rect in plan.rects], options.render_cost)
         compositor = Compositor(width, height)
         guides = Compositor(width, height, channels=6) if options.denoise else None
-        tiles, composite_s = [], 0.0
+        tiles, composite_s, waited = [], 0.0, 0.0
         started = time.perf_counter()
         with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
             for rect in plan.rects:
-                tracker.start(rect.spp)
+                paused = time.perf_counter()
+                yield tracker.start(rect.spp)
+                waited += time.perf_counter() - paused
                 piece = render_rect(renderer, rect, options)
                 placed = time.perf_counter()
                 compositor.add(rect.window, piece.pixels, piece.samples)
@@ -178,8 +187,12 @@ def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
                     guides.add(rect.window, piece.guides, piece.samples)
                 composite_s += time.perf_counter() - placed
                 tiles.append(_tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
-                tracker.finish()
-        phases["renders"] = time.perf_counter() - started - composite_s
+                paused = time.perf_counter()
+                yield tracker.finish()
+                waited += time.perf_counter() - paused
+        # Time spent between steps (a modal operator waiting for its next timer tick) is
+        # not rendering time.
+        phases["renders"] = time.perf_counter() - started - composite_s - waited
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started

@@ -19,33 +19,24 @@ the scene in it, the frames (an Open Job Description range expression such as ``
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from .director import OPERATORS
 from .errors import InputError
+from .frames import parse_frame_range
 from .map_options import MapOptions
 from .render_options import MIN_TILE_SIZE, RenderOptions
 from .task_groups import MAX_GROUPS, check_groups
 
 SPECIFICATION = "jobtemplate-2023-09"
 MODES = ("xs", "xsl")
-_FRAMES = re.compile(r"^(-?\d+)(?:-(-?\d+)(?::(\d+))?)?$")
 
 
 def parse_frames(text: str) -> str:
     """'12', '1-250' or '1-250:2' -> the same range in canonical form; InputError otherwise."""
-    match = _FRAMES.match(text.strip())
-    if not match:
-        raise InputError(f"--frames must look like 1-250, 1-250:2 or 12 (got '{text}')")
-    start = int(match.group(1))
-    end = int(match.group(2)) if match.group(2) is not None else start
-    step = int(match.group(3)) if match.group(3) is not None else 1
-    if end < start:
-        raise InputError(f"--frames {text}: the last frame comes before the first")
-    if step < 1:
-        raise InputError(f"--frames {text}: the step must be at least 1")
+    frames = parse_frame_range(text)
+    start, end, step = frames.start, frames.stop - 1, frames.step
     if start == end:
         return str(start)
     return f"{start}-{end}" + (f":{step}" if step != 1 else "")

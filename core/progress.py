@@ -3,16 +3,25 @@
 The work calls ``Progress.update(fraction, message)``; the callback given by the caller
 (the command line's progress bar, the Blender panel) shows it and may return True to cancel,
 which raises ``Cancelled`` at the next safe point (between renders).
+
+Long jobs are also written as *steps*: a generator that yields ``(fraction, message)`` at
+every safe point and returns its result. The command line drives it in one go
+(``run_steps``); the Blender panel advances it one step per timer tick (``StepRunner``) so
+the interface stays responsive, and cancels by closing it, which runs the generator's
+``finally`` and ``with`` blocks (the scene is restored) at the point where it stopped.
 """
 from __future__ import annotations
 
 import time
-from typing import Callable, Optional
+from typing import Callable, Generator, Optional, TypeVar
 
 from .errors import Cancelled
 
 #: (fraction done in [0, 1], one-line message) -> True to cancel.
 ProgressCallback = Callable[[float, str], Optional[bool]]
+T = TypeVar("T")
+#: Work split at its safe points: yields (fraction, message), returns the result.
+Steps = Generator[tuple[float, str], None, T]
 
 
 class Progress:
@@ -58,11 +67,88 @@ class TileProgress:
         self.done = 0
         self.count = 0
 
-    def start(self, spp: int) -> None:
-        self.progress.update(self.done / self.total,
-                            f"tile {self.count + 1}/{len(self.costs)} ({spp} spp)")
+    def start(self, spp: int) -> tuple[float, str]:
+        """Report the next render; returns what was reported (a step of ``Steps``)."""
+        step = (self.done / self.total, f"tile {self.count + 1}/{len(self.costs)} ({spp} spp)")
+        self.progress.update(*step)
+        return step
 
-    def finish(self) -> None:
+    def finish(self) -> tuple[float, str]:
         self.done += self.costs[self.count]
         self.count += 1
-        self.progress.update(self.done / self.total, f"tile {self.count}/{len(self.costs)} done")
+        step = (self.done / self.total, f"tile {self.count}/{len(self.costs)} done")
+        self.progress.update(*step)
+        return step
+
+
+def run_steps(steps: Steps[T], callback: ProgressCallback | None = None) -> T:
+    """Drive ``steps`` to the end, reporting each step to ``callback``; return its result.
+
+    A callback answering True raises ``Cancelled`` after the generator has been closed
+    (its clean-up has run). An exception inside the steps closes it the same way.
+    """
+    report = Progress(callback)
+    try:
+        while True:
+            try:
+                fraction, message = next(steps)
+            except StopIteration as done:
+                return done.value
+            report.update(fraction, message)
+    finally:
+        steps.close()
+
+
+def scaled_steps(steps: Steps[T], start: float, end: float, prefix: str = "") -> Steps[T]:
+    """``steps`` with its fractions mapped onto [start, end] and its messages prefixed; for
+    ``result = yield from scaled_steps(part, 0.2, 0.6)`` inside a larger job. Closing the
+    outer job closes ``steps`` too."""
+    try:
+        while True:
+            try:
+                fraction, message = next(steps)
+            except StopIteration as done:
+                return done.value
+            yield start + (end - start) * min(1.0, max(0.0, fraction)), prefix + message
+    finally:
+        steps.close()
+
+
+class StepRunner:
+    """Advance ``steps`` one step at a time (one step per timer tick of a modal operator).
+
+    After each ``advance()``: ``fraction`` and ``message`` hold the last step, ``done`` says
+    whether the generator returned, ``result`` holds what it returned. ``cancel()`` closes
+    the generator (its clean-up runs now). An exception inside a step propagates from
+    ``advance()`` with the generator already finished.
+    """
+
+    def __init__(self, steps: Steps):
+        self.steps = steps
+        self.fraction = 0.0
+        self.message = ""
+        self.done = False
+        self.result = None
+        self.started = time.perf_counter()
+
+    def advance(self) -> bool:
+        """Run the work up to its next safe point; True once it has finished."""
+        if self.done:
+            return True
+        try:
+            self.fraction, self.message = next(self.steps)
+        except StopIteration as finished:
+            self.done, self.result, self.fraction = True, finished.value, 1.0
+        except BaseException:
+            self.done = True
+            raise
+        return self.done
+
+    def cancel(self) -> None:
+        if not self.done:
+            self.done = True
+            self.steps.close()
+
+    @property
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.started

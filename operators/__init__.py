@@ -1,10 +1,19 @@
-"""Blender operators (``bpy.ops.xsl.*``) and the ``xsl-render`` command line."""
+"""Blender operators (``bpy.ops.xsl.*``) and the ``xsl-render`` command line.
+
+Nothing here imports bpy at import time: the command line stays bpy-free where it can;
+``register()`` imports the operator modules.
+"""
 
 
 def _operator_classes():
+    from .compare_operator import XSL_OT_compare
+    from .maps_operator import XSL_OT_compute_maps
+    from .render_operators import XSL_OT_render_gold, XSL_OT_render_selective
     from .scene_info import XSL_OT_scene_info
+    from .settings_operators import XSL_OT_apply_preset, XSL_OT_reset_settings
 
-    return [XSL_OT_scene_info]
+    return [XSL_OT_scene_info, XSL_OT_compute_maps, XSL_OT_render_selective, XSL_OT_render_gold,
+            XSL_OT_compare, XSL_OT_apply_preset, XSL_OT_reset_settings]
 
 
 def register():

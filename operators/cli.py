@@ -22,7 +22,9 @@ class OneLineParser(argparse.ArgumentParser):
         raise InputError(f"{self.prog}: {message}")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
+    """The command line. ``in_blender``: the parser of the batch entry (``operators/batch.py``),
+    the same commands and options, with SCENE.blend left out (Blender has the file open)."""
     from .commands import COMMANDS
 
     parser = OneLineParser(prog="xsl-render",
@@ -34,15 +36,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for command in COMMANDS:
         child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
+        child.in_blender = in_blender          # read by commands.common.add_scene_positional
         command.add_arguments(child)
         child.set_defaults(run=command.run)
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, in_blender: bool = False) -> int:
     argv = sys.argv[1:] if argv is None else argv
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(in_blender).parse_args(argv)
     except InputError as error:
         print(f"{error} (see --help)", file=sys.stderr)
         return 2

@@ -6,9 +6,17 @@ from __future__ import annotations
 import math
 
 
-def build_fog_scene(bpy, width: int = 96, height: int = 54, density: float = 0.05):
-    """Replace the session with the fog scene at ``width`` x ``height``; return the scene."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+def build_fog_scene(bpy, width: int = 96, height: int = 54, density: float = 0.05,
+                    factory_reset: bool = True):
+    """Replace the session with the fog scene at ``width`` x ``height``; return the scene.
+
+    ``factory_reset=False`` keeps the preferences (and so the enabled extensions) and only
+    empties the current scene."""
+    if factory_reset:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    else:
+        for ob in list(bpy.data.objects):
+            bpy.data.objects.remove(ob)
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"

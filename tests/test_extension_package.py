@@ -2,7 +2,8 @@
 
 The install runs in a separate Python that sees only what a stock Blender bundles (bpy,
 numpy, OpenImageIO, requests, zstandard, ...), so scikit-image and the other runtime
-dependencies must come from the wheels the zip ships.
+dependencies must come from the wheels the zip ships. Once installed, the panel is drawn
+headlessly and every panel operator runs on a small fog scene.
 """
 from __future__ import annotations
 
@@ -36,6 +37,37 @@ import skimage.filters, skimage.transform, scipy.ndimage, flip_evaluator
 for module in (skimage, scipy, flip_evaluator):
     assert "/extensions/" in module.__file__.replace("\\", "/"), module.__file__
 print("INSTALLED-AND-REGISTERED")
+""" + r"""
+# The panel and its operators, from the installed extension.
+import importlib
+from types import SimpleNamespace
+sys.path.insert(0, sys.argv[-2])                      # tests/: the scene and the stub layout
+from fog_scene import build_fog_scene
+from ui_stub import draw
+EXT = "bl_ext.user_default.xsl_render"
+settings_dump = importlib.import_module(EXT + ".addon.scene_state").settings_dump
+scene = build_fog_scene(bpy, 32, 18, factory_reset=False)
+prefs = bpy.context.preferences.addons[EXT].preferences
+prefs.max_spp, prefs.tile_size = 4, 16
+assert bpy.ops.xsl.reset_settings() == {"FINISHED"}
+assert (scene.xsl_render.max_spp, scene.xsl_render.tile_size) == (4, 16)
+context = SimpleNamespace(scene=scene, window_manager=bpy.context.window_manager)
+panels = [getattr(bpy.types, name) for name in dir(bpy.types) if name.startswith("RENDER_PT_xsl_render")]
+assert len(panels) == 5 and all(panel.poll(context) for panel in panels)
+drawn = [entry for panel in panels for entry in draw(bpy, panel, context)]
+assert {"xsl.compute_maps", "xsl.render_selective", "xsl.render_gold", "xsl.compare"} <= {
+    entry[1] for entry in drawn if entry[0] == "operator"}
+before = settings_dump(scene)
+for name in ("compute_maps", "render_selective", "render_gold", "compare"):
+    assert getattr(bpy.ops.xsl, name)() == {"FINISHED"}, name
+    assert settings_dump(scene) == before, name
+for name in ("XSL Z map", "XSL X map", "XSL Snapshot", "XSL S map", "XSL L map", "XSL XS map",
+             "XSL XSL map", "XSL Render", "XSL Samples", "XSL Gold", "XSL FLIP heatmap"):
+    assert tuple(bpy.data.images[name].size) == (32, 18), name
+assert 0.0 < bpy.data.images["XSL FLIP heatmap"]["mean_flip"] < 1.0
+scene.render.engine = "BLENDER_EEVEE"
+assert not bpy.ops.xsl.render_selective.poll() and not any(panel.poll(context) for panel in panels)
+print("PANEL-AND-OPERATORS-OK")
 """
 
 
@@ -74,7 +106,7 @@ def test_zip_holds_the_extension_and_not_the_repository(built_zips):
     assert wheels and all("win_amd64" not in n and "macosx" not in n for n in wheels)
 
 
-def test_linux_zip_installs_into_a_stock_bpy_and_registers(built_zips, tmp_path):
+def test_linux_zip_installs_into_a_stock_bpy_and_its_panel_works(built_zips, tmp_path):
     site = Path(sysconfig.get_paths()["purelib"])
     stock = tmp_path / "stock"
     stock.mkdir()
@@ -85,7 +117,9 @@ def test_linux_zip_installs_into_a_stock_bpy_and_registers(built_zips, tmp_path)
     script.write_text(INSTALL_SCRIPT)
     env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
            "PYTHONPATH": str(stock), "BLENDER_USER_RESOURCES": str(tmp_path / "user")}
-    result = subprocess.run([sys.executable, "-S", "-s", str(script),
+    result = subprocess.run([sys.executable, "-S", "-s", str(script), str(ROOT / "tests"),
                              str(built_zips["xsl_render-0.1.0-linux_x64.zip"])],
                             capture_output=True, text=True, env=env, timeout=600)
     assert "INSTALLED-AND-REGISTERED" in result.stdout, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "PANEL-AND-OPERATORS-OK" in result.stdout, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "Traceback" not in result.stderr, result.stderr[-3000:]

@@ -82,7 +82,7 @@ def test_parse_frames(text, expected):
     assert parse_frames(text) == expected
 
 
-@pytest.mark.parametrize("text", ["", "a-b", "1..5", "9-3", "1-5:0", "1-"])
+@pytest.mark.parametrize("text", ["", "a-b", "9-3", "1-5:0", "1-"])
 def test_parse_frames_refuses(text):
     with pytest.raises(InputError, match="--frames"):
         parse_frames(text)

@@ -11,8 +11,23 @@ from ...core.errors import InputError
 from ...core.map_options import MapOptions
 
 
+def add_scene_positional(parser, help_text: str = "the .blend file (never written)") -> None:
+    """SCENE.blend, or nothing at all inside Blender (the batch entry), where the scene is
+    the one Blender has open (``blender -b scene.blend --python-expr ...``)."""
+    if getattr(parser, "in_blender", False):
+        parser.add_argument("scene", metavar="SCENE.blend", nargs="?", default=None, type=_no_scene,
+                            help="leave out: inside Blender the open file is used")
+    else:
+        parser.add_argument("scene", metavar="SCENE.blend", help=help_text)
+
+
+def _no_scene(text: str):
+    raise argparse.ArgumentTypeError(f"inside Blender the open file is used; leave out '{text}' "
+                                     "(blender -b SCENE.blend --python-expr ... -- COMMAND ...)")
+
+
 def add_scene_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    add_scene_positional(parser)
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
     parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
     parser.add_argument("--frame", type=int, help="frame to evaluate (default: the current one)")

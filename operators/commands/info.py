@@ -8,7 +8,9 @@ HELP = "describe the camera, render settings, participating media, visible light
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file to inspect")
+    from .common import add_scene_positional
+
+    add_scene_positional(parser, "the .blend file to inspect")
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of text")
 
@@ -21,7 +23,7 @@ def run(args) -> int:
 
     scene = open_blend(args.scene, args.scene_name)
     info = describe_scene(scene, bpy.context.evaluated_depsgraph_get())
-    info["file"] = str(args.scene)
+    info["file"] = str(args.scene or bpy.data.filepath or "(unsaved)")
     if args.json:
         print(json.dumps(info, indent=2))
     else:

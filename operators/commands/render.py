@@ -1,7 +1,9 @@
 """``xsl-render render SCENE.blend --mode gold|xs|xsl|uniform|adaptive --max-spp N --out FILE.exr``.
 
 Writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel; the PNG's
-grey level is spp / max_spp) and, with --stats, the run's statistics as JSON.
+grey level is spp / max_spp) and, with --stats, the run's statistics as JSON. A ``#`` run in
+FILE's name becomes the frame number; ``--frames START-END`` renders an animation
+(``render_animation.py``).
 """
 from __future__ import annotations
 
@@ -11,6 +13,8 @@ import time
 from pathlib import Path
 
 from ...core.errors import InputError
+from ...core.frames import frame_path, has_frame_marker, parse_frame_range
+from ...core.render_files import write_render_outputs
 from .common import (add_map_arguments, add_scene_arguments, add_tile_arguments,
                      map_options_from_args, render_options_from_args, warnings_as_lines)
 
@@ -28,6 +32,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-spp", type=int, required=True, help="samples per pixel where the map is 1")
     parser.add_argument("--out", required=True, metavar="FILE.exr", help="the rendered image")
     parser.add_argument("--stats", metavar="FILE.json", help="write the run's statistics here")
+    parser.add_argument("--frames", metavar="START-END[:STEP]",
+                        help="render these frames, each with its own maps (the camera rays are "
+                             "cast once while camera and geometry stay still); --out names them "
+                             "like Blender: its last run of # becomes the frame number "
+                             "(out/frame_####.exr), else 4 digits are added before .exr")
     maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
     maps.add_argument("--map", metavar="FILE.exr", help="the director map, values in [0, 1] at render size")
     maps.add_argument("--maps", metavar="DIR", help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
@@ -129,40 +138,46 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() != ".exr":
         raise InputError(f"--out must name an .exr file (got {out})")
+    frames = _frames(args)
     budget = _budget(args)
+    if frames is not None and "map" in budget:
+        raise InputError("--frames computes every frame's own maps; --map and --maps hold one frame's")
     started = time.perf_counter()
     director_map = _read_map(budget["map"]) if "map" in budget else None
     map_seconds = time.perf_counter() - started
 
-    from ...addon import selective_render as sr
     from ...addon.blend_session import open_blend
+    from ...addon.scene_state import preserved_scene
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
 
     scene = open_blend(args.scene, args.scene_name)
-    if args.frame is not None:
-        scene.frame_set(args.frame)        # the opened copy only; the file is never written
+    if frames is not None:
+        from .render_animation import render_frames
+
+        return render_frames(scene, args, options, budget, frames, out)
     bar = None if args.quiet else ProgressBar(args.mode)
-    try:
-        with InterruptToCancel() as interrupt:
-            progress = interrupt.wrap(bar)
-            if "compute_maps" in budget:
-                director_map, map_seconds = _compute_map(scene, args, budget["compute_maps"], options)
-            if args.mode == "gold":
-                outcome = sr.render_gold(scene, options, progress=progress)
-            elif args.mode in ("xs", "xsl"):
-                outcome = sr.render_selective(scene, director_map, options, progress=progress,
-                                              mode=args.mode, map_seconds=map_seconds)
-            elif args.mode == "uniform":
-                outcome = sr.render_uniform(scene, options, spp=budget.get("spp"),
-                                            seconds=budget.get("seconds"), progress=progress)
-            else:
-                threshold = args.noise_threshold if args.noise_threshold is not None \
-                    else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
-                outcome = sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=progress)
-    finally:
-        if bar is not None:
-            bar.close()
+    # Inside Blender (the batch entry) this is the user's open scene: give its frame back.
+    with preserved_scene(scene):
+        if args.frame is not None:
+            scene.frame_set(args.frame)        # an opened copy is never written to its file
+        if has_frame_marker(str(out)):
+            out = Path(frame_path(str(out), scene.frame_current))
+        try:
+            with InterruptToCancel() as interrupt:
+                progress = interrupt.wrap(bar)
+                if "compute_maps" in budget:
+                    director_map, map_seconds = _compute_map(scene, args, budget["compute_maps"], options)
+                if args.mode in ("xs", "xsl"):
+                    from ...addon import selective_render as sr
+
+                    outcome = sr.render_selective(scene, director_map, options, progress=progress,
+                                                  mode=args.mode, map_seconds=map_seconds)
+                else:
+                    outcome = render_baseline(scene, args, options, budget, progress)
+        finally:
+            if bar is not None:
+                bar.close()
     for warning in outcome.warnings:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     stats = outcome.stats
@@ -171,30 +186,35 @@ def run(args) -> int:
         stats["budget_from"] = budget["from"]
     if "budget_mean_spp" in budget:
         stats["budget_mean_spp"] = budget["budget_mean_spp"]
-    _write_outputs(out, outcome, options, args.stats)
-    print(f"{args.mode}: {stats['resolution'][0]}x{stats['resolution'][1]}, mean "
-          f"{stats['mean_spp']:.2f} spp in {stats['renders']} render(s), {stats['wall_s']:.2f} s -> {out}")
+    write_render_outputs(out, outcome.image, outcome.samples, stats, options.max_spp, options.seed,
+                         args.stats)
+    print(summary_line(args.mode, stats, out))
     return 0
 
 
-def spp_paths(out: Path) -> tuple[Path, Path]:
-    """FILE.exr -> (FILE_spp.exr, FILE_spp.png)."""
-    return out.with_name(out.stem + "_spp.exr"), out.with_name(out.stem + "_spp.png")
+def _frames(args):
+    """The --frames range (None without it), checked before the scene is opened."""
+    if args.frames is None:
+        return None
+    if args.frame is not None:
+        raise InputError("--frame and --frames cannot be combined")
+    return parse_frame_range(args.frames)
 
 
-def _write_outputs(out: Path, outcome, options, stats_path: str | None) -> None:
-    from ...core.files import write_json
-    from ...core.imageio import write_exr, write_png
+def render_baseline(scene, args, options, budget: dict, progress=None):
+    """One gold, uniform or adaptive render of the scene at its current frame."""
+    from ...addon import selective_render as sr
 
-    started = time.perf_counter()
-    stats = outcome.stats
-    attributes = {"xsl_render:mode": stats["mode"], "xsl_render:max_spp": options.max_spp,
-                  "xsl_render:seed": options.seed, "xsl_render:mean_spp": float(stats["mean_spp"])}
-    spp_exr, spp_png = spp_paths(out)
-    write_exr(out, outcome.image, ["R", "G", "B", "A"], attributes=attributes)
-    write_exr(spp_exr, outcome.samples, ["Y"], attributes=attributes)
-    write_png(spp_png, outcome.samples / float(options.max_spp))
-    stats["phases_s"]["write"] = time.perf_counter() - started
-    stats["wall_s"] = sum(stats["phases_s"].values())
-    if stats_path:
-        write_json(stats_path, stats)
+    if args.mode == "gold":
+        return sr.render_gold(scene, options, progress=progress)
+    if args.mode == "uniform":
+        return sr.render_uniform(scene, options, spp=budget.get("spp"), seconds=budget.get("seconds"),
+                                 progress=progress)
+    threshold = args.noise_threshold if args.noise_threshold is not None \
+        else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
+    return sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=progress)
+
+
+def summary_line(mode: str, stats: dict, out: Path) -> str:
+    return (f"{mode}: {stats['resolution'][0]}x{stats['resolution'][1]}, mean "
+            f"{stats['mean_spp']:.2f} spp in {stats['renders']} render(s), {stats['wall_s']:.2f} s -> {out}")

@@ -1,0 +1,74 @@
+"""The panel's settings on every scene (``scene.xsl_render``) and the run status on the
+window manager (``window_manager.xsl_render_status``, never saved).
+
+The settings are built from ``core.panel_settings.SETTINGS`` when the add-on registers, with
+the extension preferences' values as their defaults: a setting the artist never changed on a
+scene follows the preferences (read at start-up; "Defaults from Preferences" in the preset
+menu copies the current ones).
+"""
+from __future__ import annotations
+
+import bpy
+
+from ..core.panel_settings import SETTINGS, Setting
+
+
+def path_options() -> set:
+    """Options of a file path property that may start with Blender's "//" (relative to the
+    .blend): Blender 4.5+ warns without the flag, older versions do not know it."""
+    try:
+        bpy.props.StringProperty(options={"PATH_SUPPORTS_BLEND_RELATIVE"})
+    except TypeError:
+        return set()
+    return {"PATH_SUPPORTS_BLEND_RELATIVE"}
+
+
+_SCENE_ONLY = {
+    "use_animation": bpy.props.BoolProperty(
+        name="Animation", default=False,
+        description="Render the scene's frame range (start to end, by its step), each frame with "
+                    "its own maps; the camera rays are reused while camera and geometry stay still"),
+    "filepath": bpy.props.StringProperty(
+        name="Output", subtype="FILE_PATH", default="", options=path_options(),
+        description="Numbered EXR files for animations (frame_####.exr: the last # run becomes the "
+                    "frame number); empty: the scene's output path"),
+}
+
+
+def blender_property(setting: Setting, default=None):
+    """The bpy property of one setting, with ``default`` instead of the built-in one."""
+    value = setting.default if default is None else default
+    common = {"name": setting.label, "description": setting.description}
+    if setting.kind == "enum":
+        return bpy.props.EnumProperty(items=list(setting.items), default=value, **common)
+    if setting.kind == "bool":
+        return bpy.props.BoolProperty(default=bool(value), **common)
+    limits = {key: getattr(setting, key) for key in ("min", "max", "soft_min", "soft_max")
+              if getattr(setting, key) is not None}
+    if setting.kind == "int":
+        limits = {key: int(val) for key, val in limits.items()}
+        return bpy.props.IntProperty(default=int(value), **limits, **common)
+    return bpy.props.FloatProperty(default=float(value), precision=2, step=5, **limits, **common)
+
+
+def settings_annotations(defaults: dict | None = None) -> dict:
+    defaults = defaults or {}
+    return {setting.name: blender_property(setting, defaults.get(setting.name)) for setting in SETTINGS}
+
+
+def make_settings_class(defaults: dict | None = None) -> type:
+    """The scene's PropertyGroup, with ``defaults`` (from the preferences) as its defaults."""
+    return type("XSL_PG_settings", (bpy.types.PropertyGroup,), {
+        "__annotations__": {**settings_annotations(defaults), **_SCENE_ONLY},
+        "__doc__": "XSL Render settings of a scene: the paper's map options and the sampling",
+    })
+
+
+class XSL_PG_status(bpy.types.PropertyGroup):
+    """What the running (or last) XSL Render job shows in the panel."""
+
+    running: bpy.props.BoolProperty(name="Running", default=False)
+    label: bpy.props.StringProperty(name="Job", default="")
+    fraction: bpy.props.FloatProperty(name="Progress", default=0.0, min=0.0, max=1.0, subtype="FACTOR")
+    message: bpy.props.StringProperty(name="Message", default="")
+    last_report: bpy.props.StringProperty(name="Last Result", default="")

@@ -1,0 +1,70 @@
+"""Frame ranges and numbered output names for animations, as Blender names its own frames.
+
+Blender's rule for an output path (``BLI_path_frame``): the last run of ``#`` in the file
+name (never in a folder name) becomes the frame number, zero-padded to the run's length;
+without any ``#`` the number is appended with four digits, and a path ending in a folder
+separator gets just the number as its name. The file extension is then added.
+
+One deliberate difference: a name that already ends in ``.exr`` keeps it at the end, so
+``render.exr`` numbers as ``render0001.exr`` (Blender would write ``render.exr0001.exr``).
+"""
+from __future__ import annotations
+
+import re
+
+from .errors import InputError
+
+EXTENSION = ".exr"
+#: Digits Blender pads an appended frame number to.
+DEFAULT_DIGITS = 4
+_RANGE = re.compile(r"^\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*(?::\s*(\d+)\s*)?)?$")
+
+
+def parse_frame_range(text: str) -> range:
+    """``"1-48"``, ``"1..48"``, ``"1-48:2"`` (every 2nd frame) or ``"7"`` -> a range of frames.
+
+    Raises InputError for anything else, an end before the start or a step below 1.
+    """
+    match = _RANGE.match(str(text))
+    if not match:
+        raise InputError(f"--frames must look like START-END or START-END:STEP (got '{text}')")
+    start = int(match.group(1))
+    end = int(match.group(2)) if match.group(2) is not None else start
+    step = int(match.group(3)) if match.group(3) is not None else 1
+    if end < start:
+        raise InputError(f"--frames {text}: the end frame {end} is before the start frame {start}")
+    if step < 1:
+        raise InputError(f"--frames {text}: the step must be at least 1")
+    return range(start, end + 1, step)
+
+
+def has_frame_marker(pattern: str) -> bool:
+    """True when the file name (not a folder) of ``pattern`` holds a ``#``."""
+    return "#" in _split(pattern)[1]
+
+
+def frame_path(pattern: str, frame: int) -> str:
+    """The output path of ``frame``: the last ``#`` run of the file name replaced by the
+    zero-padded frame number, else the number appended (before a trailing ``.exr``);
+    ``.exr`` added when missing. Folders are kept as they are (``#`` in them too)."""
+    folder, name = _split(pattern)
+    runs = list(re.finditer(r"#+", name))
+    if runs:
+        run = runs[-1]
+        number = f"{frame:0{len(run.group())}d}"
+        name = name[:run.start()] + number + name[run.end():]
+    else:
+        number = f"{frame:0{DEFAULT_DIGITS}d}"
+        if name.lower().endswith(EXTENSION):
+            name = name[:-len(EXTENSION)] + number + name[-len(EXTENSION):]
+        else:
+            name = name + number
+    if not name.lower().endswith(EXTENSION):
+        name += EXTENSION
+    return folder + name
+
+
+def _split(pattern: str) -> tuple[str, str]:
+    """(folder including its last separator, file name); either separator counts."""
+    cut = max(pattern.rfind("/"), pattern.rfind("\\"))
+    return pattern[:cut + 1], pattern[cut + 1:]

@@ -1,0 +1,42 @@
+"""The files of one rendered frame: the image, its samples per pixel and the statistics.
+
+``FILE.exr`` (RGBA float, scene-linear), ``FILE_spp.exr`` (samples per pixel, one channel)
+and ``FILE_spp.png`` (grey level = spp / max_spp), the same for ``xsl-render render``, the
+batch entry and the panel's operators. Every write is atomic.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .files import write_json
+from .imageio import write_exr, write_png
+
+
+def spp_paths(out: Path) -> tuple[Path, Path]:
+    """FILE.exr -> (FILE_spp.exr, FILE_spp.png)."""
+    out = Path(out)
+    return out.with_name(out.stem + "_spp.exr"), out.with_name(out.stem + "_spp.png")
+
+
+def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: dict,
+                         max_spp: int, seed: int, stats_path: str | Path | None = None) -> list[Path]:
+    """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given).
+
+    The time the writes took is added to ``stats`` as the "write" phase.
+    """
+    out = Path(out)
+    started = time.perf_counter()
+    attributes = {"xsl_render:mode": stats["mode"], "xsl_render:max_spp": max_spp,
+                  "xsl_render:seed": seed, "xsl_render:mean_spp": float(stats["mean_spp"])}
+    spp_exr, spp_png = spp_paths(out)
+    written = [write_exr(out, image, ["R", "G", "B", "A"], attributes=attributes),
+               write_exr(spp_exr, samples, ["Y"], attributes=attributes),
+               write_png(spp_png, samples / float(max_spp))]
+    stats["phases_s"]["write"] = time.perf_counter() - started
+    stats["wall_s"] = sum(stats["phases_s"].values())
+    if stats_path:
+        written.append(write_json(stats_path, stats))
+    return written

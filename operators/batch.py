@@ -1,0 +1,35 @@
+"""The batch entry: ``xsl-render`` commands inside ``blender -b scene.blend``.
+
+    blender -b scene.blend --python-expr "import bl_ext.user_default.xsl_render as x; x.batch()" \\
+        -- render --mode xsl --max-spp 16 --out out.exr
+
+Everything after ``--`` is parsed by the parser of the ``xsl-render`` command
+(``operators/cli.py``) and run by the same code, with one difference: SCENE.blend is left
+out, the commands work on the file Blender has open (``--scene-name`` still picks another
+scene of it). So ``info``, ``maps``, ``render`` (also ``--frames``) behave as on the
+command line, and nothing is written to the .blend.
+
+Exit: 0 returns normally (Blender goes on with its own arguments); a failure raises
+``SystemExit`` with the command's code (2 bad input, 1 internal error, 130 cancelled), which
+ends Blender with that code after printing the one-line message.
+"""
+from __future__ import annotations
+
+import sys
+
+
+def arguments_after_separator(argv: list[str]) -> list[str]:
+    """What follows the first ``--`` (Blender ignores the rest of its command line there)."""
+    return list(argv[argv.index("--") + 1:]) if "--" in argv else []
+
+
+def batch(argv: list[str] | None = None) -> int:
+    """Run one ``xsl-render`` command on the open file; ``argv`` defaults to what follows
+    ``--`` on Blender's command line."""
+    from .cli import main
+
+    args = arguments_after_separator(sys.argv) if argv is None else list(argv)
+    code = main(args, in_blender=True)
+    if code:
+        raise SystemExit(code)
+    return 0

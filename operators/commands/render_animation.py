@@ -1,0 +1,73 @@
+"""``xsl-render render ... --frames START-END --out 'out/frame_####.exr'``: an animation.
+
+Each frame is written as soon as it is done (``frame_path`` numbers it as Blender would),
+with its ``_spp.exr`` / ``_spp.png``; ``--stats`` gets one JSON for the whole run with every
+frame's statistics; ``--save-maps DIR`` keeps each frame's maps in ``DIR/NNNN/`` and the
+shared ray cache in ``DIR/zcache.npz`` (a temporary folder otherwise).
+"""
+from __future__ import annotations
+
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from ...core.frames import frame_path
+from ...core.render_files import write_render_outputs
+
+
+def render_frames(scene, args, options, budget: dict, frames: range, out: Path) -> int:
+    from ...addon.animation import frames_steps, selective_frame, single_render_frame
+    from ...addon.director_maps import MapWarning
+    from ...core.files import write_json
+    from ...core.map_files import write_map_set
+    from ...core.progress import run_steps
+    from ...core.xmap import XMapWarning
+    from ..interrupt import InterruptToCancel
+    from ..progress_bar import ProgressBar
+    from .common import warnings_as_lines
+    from .render import render_baseline, summary_line
+
+    save_maps = Path(args.save_maps) if args.save_maps else None
+    cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
+    if args.mode in ("xs", "xsl"):
+        job = selective_frame(budget["compute_maps"], options, args.mode, cache_dir)
+    else:
+        job = single_render_frame(lambda s: render_baseline(s, args, options, budget), args.mode)
+
+    def on_frame(result) -> dict:
+        path = Path(frame_path(str(out), result.frame))
+        stats = result.outcome.stats
+        stats.update(frame=result.frame, file=str(args.scene), out=str(path))
+        for warning in result.outcome.warnings:
+            print(f"xsl-render: warning: frame {result.frame}: {warning}", file=sys.stderr)
+        write_render_outputs(path, result.outcome.image, result.outcome.samples, stats,
+                             options.max_spp, options.seed)
+        if save_maps is not None and result.maps is not None:
+            write_map_set(save_maps / f"{result.frame:04d}", result.maps)
+        print(f"frame {result.frame}: " + summary_line(args.mode, stats, path), flush=True)
+        return stats
+
+    started = time.perf_counter()
+    bar = None if args.quiet else ProgressBar(args.mode)
+    try:
+        with InterruptToCancel() as interrupt, warnings_as_lines(MapWarning, XMapWarning):
+            done = run_steps(frames_steps(scene, frames, job, on_frame), interrupt.wrap(bar))
+    finally:
+        if bar is not None:
+            bar.close()
+        if save_maps is None:
+            shutil.rmtree(cache_dir, ignore_errors=True)
+    hits = [stats["maps"]["ray_cache_hit"] for stats in done if "maps" in stats]
+    if args.stats:
+        write_json(args.stats, {
+            "mode": args.mode, "file": str(args.scene), "out": str(out),
+            "frames": done, "frame_range": [frames.start, frames.stop - 1, frames.step],
+            "wall_s": time.perf_counter() - started,
+            "total_samples": sum(stats["total_samples"] for stats in done),
+            "ray_cache_hits": sum(hits)})
+    if hits:
+        print(f"{len(done)} frames; camera rays cast {hits.count(False)} time(s), reused "
+              f"{hits.count(True)} time(s)")
+    return 0

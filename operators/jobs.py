@@ -1,0 +1,220 @@
+"""What each panel operator does, as a job: steps (``core.progress``) and a finish.
+
+The operators (``maps_operator.py``, ``render_operators.py``, ``compare_operator.py``) only
+build a job from the scene and their own properties and hand it to ``job_operator.py``,
+which runs it modally (the panel) or in one go (scripts, ``blender -b``). Keeping the jobs
+here, apart from the operator classes, lets tests step them exactly as a modal operator does.
+"""
+from __future__ import annotations
+
+import hashlib
+import re
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from ..core.errors import InputError
+from ..core.frames import frame_path, has_frame_marker
+from ..core.map_files import MapSet
+from ..core.panel_settings import map_options, render_options
+from ..core.progress import Steps
+from ..core.render_files import write_render_outputs
+
+
+@dataclass
+class JobResult:
+    """What a finished job tells the artist: one report line and the image to look at."""
+
+    report: str
+    image: object = None
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Job:
+    label: str                                  # "Maps", "Selective render", ...
+    steps: Steps
+    finish: Callable[[object], JobResult]       # runs once, outside every preserved_scene
+
+
+def ray_cache_dir(scene) -> Path:
+    """This session's ray cache for the scene: recomputing maps after a change to the media
+    only (the paper's "instant recomputation") reuses the rays cast before. The cache key
+    (camera and geometry) is checked on every use, so a stale cache is never used."""
+    import bpy
+
+    base = Path(bpy.app.tempdir or tempfile.gettempdir()) / "xsl_render_rays"
+    digest = hashlib.sha1(f"{bpy.data.filepath}\0{scene.name}".encode()).hexdigest()[:12]
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", scene.name)[:40]
+    return base / f"{safe}-{digest}"
+
+
+# -- maps ----------------------------------------------------------------------------------
+def maps_job(scene) -> Job:
+    from ..addon.director_maps import map_steps
+    from ..addon.image_display import MAP_IMAGES, show_maps
+
+    options = map_options(scene.xsl_render)
+
+    def finish(maps: MapSet) -> JobResult:
+        images = show_maps(maps)
+        shown = next(image for image in images if image.name == MAP_IMAGES[scene.xsl_render.director.lower()])
+        return JobResult(maps_report(maps), shown, list(maps.info["warnings"]))
+
+    return Job("Maps", map_steps(scene, options, cache_dir=ray_cache_dir(scene)), finish)
+
+
+def maps_report(maps: MapSet) -> str:
+    seconds = maps.info["seconds"]
+    width, height = maps.info["size"]
+    rays = "reused" if maps.info["x"]["cache"]["hit"] else "cast"
+    return (f"Maps {width}x{height} in {seconds['total']:.2f} s: X {seconds['x']:.2f} s (camera rays "
+            f"{rays}), snapshot {seconds['snapshot']:.2f} s, S {seconds['s']:.2f} s, L {seconds['l']:.2f} s")
+
+
+# -- renders -------------------------------------------------------------------------------
+def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
+    """Maps, then the selective render driven by the director map chosen in the panel."""
+    from ..addon.animation import selective_frame
+
+    settings = scene.xsl_render
+    mode = settings.director.lower()
+    options = render_options(settings)
+    frame_job = selective_frame(map_options(settings), options, mode, ray_cache_dir(scene))
+    label = f"{mode.upper()} render"
+    if animation:
+        return _animation_job(scene, label, frame_job, options, filepath, gold=False)
+    return Job(label, frame_job(scene), _still_finish(scene, options, filepath, gold=False))
+
+
+def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = False) -> Job:
+    """Max samples everywhere: one Cycles render, or (``banded``, the panel) full-width bands
+    bit-identical to it that a modal operator can stop between."""
+    from ..addon.animation import single_render_frame, stepped_render_frame
+    from ..addon.banded_gold import gold_band_steps
+    from ..addon.selective_render import render_gold
+
+    options = render_options(scene.xsl_render)
+    if banded:
+        frame_job = stepped_render_frame(lambda s: gold_band_steps(s, options))
+    else:
+        frame_job = single_render_frame(lambda s: render_gold(s, options), "gold")
+    if animation:
+        return _animation_job(scene, "Gold render", frame_job, options, filepath, gold=True)
+    return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))
+
+
+def _still_finish(scene, options, filepath: str, gold: bool):
+    import bpy
+
+    from ..addon.image_display import show_maps, show_render
+
+    def finish(result) -> JobResult:
+        outcome = result.outcome
+        warnings = list(outcome.warnings)
+        if result.maps is not None:
+            show_maps(result.maps)
+            warnings += result.maps.info["warnings"]
+        image, _ = show_render(outcome, options.max_spp, gold=gold)
+        report = render_report(outcome.stats)
+        if filepath:
+            path = bpy.path.abspath(filepath)
+            if has_frame_marker(path):
+                path = frame_path(path, result.frame)
+            write_render_outputs(path, outcome.image, outcome.samples, outcome.stats,
+                                 options.max_spp, options.seed)
+            report += f" -> {path}"
+        return JobResult(report, image, warnings)
+
+    return finish
+
+
+def render_report(stats: dict) -> str:
+    width, height = stats["resolution"]
+    share = 100.0 * stats["total_samples"] / max(1, stats["gold_samples"])
+    return (f"{stats['mode'].upper()} {width}x{height}: mean {stats['mean_spp']:.1f} spp "
+            f"({share:.0f}% of the gold standard's samples) in {stats['renders']} render(s), "
+            f"{stats['wall_s']:.1f} s")
+
+
+def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: bool) -> Job:
+    """The scene's frame range, each frame written as a numbered EXR as soon as it is done."""
+    import bpy
+
+    from ..addon.animation import frames_steps
+    from ..addon.image_display import (GOLD_IMAGE, GOLD_SAMPLES_IMAGE, MAP_IMAGES, RENDER_IMAGE,
+                                       SAMPLES_IMAGE, ensure_image, show_maps, show_render)
+    from ..addon.scene_probe import render_size
+
+    pattern = bpy.path.abspath(filepath or scene.render.filepath)
+    if not pattern:
+        raise InputError("no output path for the frames: set one in the panel or in Output properties")
+    frames = range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step))
+    # frames_steps removes datablocks made during the run, so the images exist beforehand.
+    width, height = render_size(scene)
+    names = [(GOLD_IMAGE, False), (GOLD_SAMPLES_IMAGE, True)] if gold else \
+        [(RENDER_IMAGE, False), (SAMPLES_IMAGE, True)] + [(name, key != "snapshot")
+                                                          for key, name in MAP_IMAGES.items()]
+    for name, data in names:
+        ensure_image(name, width, height, data)
+
+    def on_frame(result) -> dict:
+        path = frame_path(pattern, result.frame)
+        outcome = result.outcome
+        write_render_outputs(path, outcome.image, outcome.samples, outcome.stats,
+                             options.max_spp, options.seed)
+        show_render(outcome, options.max_spp, gold=gold)
+        if result.maps is not None:
+            show_maps(result.maps)
+        maps = outcome.stats.get("maps", {})
+        return {"frame": result.frame, "path": path, "mean_spp": outcome.stats["mean_spp"],
+                "ray_cache_hit": maps.get("ray_cache_hit"), "warnings": list(outcome.warnings)
+                + list(maps.get("warnings", []))}
+
+    def finish(done: list) -> JobResult:
+        hits = [entry["ray_cache_hit"] for entry in done if entry["ray_cache_hit"] is not None]
+        report = (f"{label}: {len(done)} frame(s) {frames.start}..{frames.stop - 1} -> "
+                  f"{Path(done[0]['path']).parent if done else pattern}")
+        if hits:
+            report += f"; camera rays cast {hits.count(False)}x, reused {hits.count(True)}x"
+        image = bpy.data.images.get(GOLD_IMAGE if gold else RENDER_IMAGE)
+        warnings = list(dict.fromkeys(w for entry in done for w in entry["warnings"]))
+        return JobResult(report, image, warnings)
+
+    return Job(f"{label} (animation)", frames_steps(scene, frames, frame_job, on_frame), finish)
+
+
+# -- compare -------------------------------------------------------------------------------
+def compare_job() -> Job:
+    """The gold standard against the selective render: FLIP and MSE, and FLIP's heatmap."""
+    import bpy
+
+    from ..addon.image_display import GOLD_IMAGE, HEATMAP_IMAGE, RENDER_IMAGE, read_pixels, show
+    from ..core.heatmap import colourise
+    from ..core.image_pair import check_pair
+    from ..core.metrics import compare_images
+
+    def steps():
+        gold, test = bpy.data.images.get(GOLD_IMAGE), bpy.data.images.get(RENDER_IMAGE)
+        if gold is None or test is None:
+            raise InputError(f"render '{GOLD_IMAGE}' and '{RENDER_IMAGE}' first (Gold Render, Selective Render)")
+        yield 0.0, "reading images"
+        pair = check_pair(read_pixels(gold), read_pixels(test), hdr=True, names=(GOLD_IMAGE, RENDER_IMAGE))
+        yield 0.1, "MSE and FLIP"
+        return compare_images(pair, vdp=False)
+
+    def finish(results) -> JobResult:
+        flip, mse = results["flip"], results["mse"]
+        numbers = {"mean_flip": float(flip.extra["mean_flip"]), "mse": float(mse.extra["mse"]),
+                   "flip_error_pixels_percent": float(flip.error_pixel_percent),
+                   "mse_error_pixels_percent": float(mse.error_pixel_percent),
+                   "flip_mode": str(flip.extra["mode"])}
+        image = show(HEATMAP_IMAGE, colourise(flip.per_pixel, flip.heatmap_full_scale), data=True,
+                     info=numbers)
+        report = (f"Gold vs {RENDER_IMAGE}: mean FLIP {numbers['mean_flip']:.4f} ({numbers['flip_mode']}), "
+                  f"MSE {numbers['mse']:.3g}; error pixels FLIP {numbers['flip_error_pixels_percent']:.2f} %, "
+                  f"MSE {numbers['mse_error_pixels_percent']:.2f} %")
+        return JobResult(report, image)
+
+    return Job("Compare", steps(), finish)

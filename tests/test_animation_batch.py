@@ -1,0 +1,138 @@
+"""Animation and batch use: ``xsl-render render --frames`` through the batch entry (what
+``blender -b scene.blend --python-expr "...x.batch()" -- render ...`` runs), the render
+operator's animation toggle, and the batch entry against the ``xsl-render`` command.
+
+The scene: fog whose density is keyframed (0.02 at frame 1, 0.3 at frame 3) in front of
+static geometry and a static camera, so frames 2 and 3 must reuse frame 1's camera rays."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+from fog_scene import build_fog_scene
+
+from xsl_render.core.imageio import read_image
+
+pytestmark = [pytest.mark.blender, pytest.mark.render]
+
+W, H = 32, 18
+
+
+@pytest.fixture(scope="module")
+def addon():
+    import xsl_render
+
+    xsl_render.register()
+    yield xsl_render
+    xsl_render.unregister()
+
+
+def density(scene):
+    return next(node for node in scene.world.node_tree.nodes
+                if node.type == "PRINCIPLED_VOLUME").inputs["Density"]
+
+
+@pytest.fixture
+def foggy_animation(blender, addon):
+    scene = build_fog_scene(blender, W, H)
+    for frame, value in ((1, 0.02), (3, 0.3)):
+        density(scene).default_value = value
+        density(scene).keyframe_insert("default_value", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.frame_set(2)
+    settings = scene.xsl_render
+    settings.max_spp, settings.tile_size = 4, 16
+    return scene
+
+
+def test_frames_reuse_the_camera_rays_and_are_numbered(blender, addon, foggy_animation, tmp_path):
+    from xsl_render.addon.scene_state import settings_dump
+
+    before, fog_before = settings_dump(foggy_animation), density(foggy_animation).default_value
+    out, maps = tmp_path / "out", tmp_path / "maps"
+    assert addon.batch(["render", "--mode", "xsl", "--max-spp", "4", "--tile-size", "16", "--frames", "1-3",
+                        "--out", str(out / "frame_####.exr"), "--stats", str(out / "stats.json"),
+                        "--save-maps", str(maps), "--quiet"]) == 0
+    assert settings_dump(foggy_animation) == before and foggy_animation.frame_current == 2
+    assert density(foggy_animation).default_value == fog_before          # frame 2's fog again
+    assert sorted(p.name for p in out.glob("*.exr")) == [
+        f"frame_000{i}{suffix}.exr" for i in (1, 2, 3) for suffix in ("", "_spp")]
+    stats = json.loads((out / "stats.json").read_text())
+    assert [frame["frame"] for frame in stats["frames"]] == [1, 2, 3]
+    assert [frame["maps"]["ray_cache_hit"] for frame in stats["frames"]] == [False, True, True]
+    assert stats["ray_cache_hits"] == 2 and (maps / "zcache.npz").exists()
+    # Each frame saw its own fog: denser fog lets less light through.
+    x_means = [float(read_image(maps / f"000{i}" / "x.exr").mean()) for i in (1, 2, 3)]
+    assert x_means[0] > x_means[1] > x_means[2]
+    for frame in stats["frames"]:
+        assert read_image(frame["out"]).shape == (H, W, 4)
+        assert frame["maps"]["frame"] == frame["frame"]
+
+
+def test_the_render_operator_renders_the_frame_range(blender, foggy_animation, tmp_path):
+    from xsl_render.addon.image_display import read_pixels
+    from xsl_render.addon.scene_state import settings_dump
+    from xsl_render.operators.jobs import ray_cache_dir
+
+    shutil.rmtree(ray_cache_dir(foggy_animation), ignore_errors=True)
+    foggy_animation.render.filepath = str(tmp_path / "anim" / "shot_##")
+    before = settings_dump(foggy_animation)
+    assert blender.ops.xsl.render_selective(animation=True) == {"FINISHED"}
+    assert settings_dump(foggy_animation) == before
+    assert sorted(p.name for p in (tmp_path / "anim").glob("shot_0?.exr")) == ["shot_01.exr", "shot_02.exr",
+                                                                              "shot_03.exr"]
+    report = blender.context.window_manager.xsl_render_status.last_report
+    assert "3 frame(s) 1..3" in report and "camera rays cast 1x, reused 2x" in report
+    last = read_image(tmp_path / "anim" / "shot_03.exr")
+    np.testing.assert_array_equal(read_pixels(blender.data.images["XSL Render"]), last)
+
+    assert blender.ops.xsl.render_gold(animation=True, filepath=str(tmp_path / "gold" / "g_###.exr")) == {"FINISHED"}
+    assert sorted(p.name for p in (tmp_path / "gold").glob("g_*.exr")) == [
+        f"g_00{i}{suffix}.exr" for i in (1, 2, 3) for suffix in ("", "_spp")]
+    assert settings_dump(foggy_animation) == before
+
+
+def test_batch_entry_renders_like_the_command(blender, addon, cli, foggy_animation, tmp_path):
+    path = tmp_path / "fog.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(path))
+    args = ["--mode", "xsl", "--max-spp", "4", "--tile-size", "16", "--frame", "3", "--quiet"]
+    result = cli("render", path, *args, "--out", tmp_path / "cli_#.exr")
+    assert result.returncode == 0, result.stderr
+    assert addon.batch(["render", *args, "--out", str(tmp_path / "batch_#.exr")]) == 0
+    assert blender.context.scene.frame_current == 2                  # the open scene keeps its frame
+    np.testing.assert_array_equal(read_image(tmp_path / "batch_3.exr"), read_image(tmp_path / "cli_3.exr"))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["render", "fog.blend", "--mode", "gold", "--max-spp", "4", "--out", "x.exr"],
+     "inside Blender the open file is used; leave out 'fog.blend'"),
+    (["render", "--mode", "gold", "--max-spp", "4", "--out", "x.exr", "--frame", "1", "--frames", "1-2"],
+     "--frame and --frames cannot be combined"),
+    (["render", "--mode", "xsl", "--max-spp", "4", "--out", "x.exr", "--frames", "3-1"],
+     "the end frame 1 is before the start frame 3"),
+    (["render", "--mode", "xsl", "--max-spp", "4", "--out", "x.exr", "--frames", "1-2", "--maps", "m"],
+     "--frames computes every frame's own maps"),
+    ([], "the following arguments are required: COMMAND"),
+])
+def test_batch_bad_input_exits_2_with_one_line(addon, foggy_animation, capfd, tmp_path, monkeypatch,
+                                               args, message):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as done:
+        addon.batch(args)
+    assert done.value.code == 2
+    lines = capfd.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]
+    assert not list(tmp_path.iterdir())
+
+
+def test_batch_arguments_follow_the_separator(addon, foggy_animation, capfd, monkeypatch):
+    from xsl_render.operators.batch import arguments_after_separator
+
+    assert arguments_after_separator(["blender", "-b", "f.blend", "--python-expr", "x", "--", "info"]) == ["info"]
+    assert arguments_after_separator(["blender", "-b"]) == []
+    monkeypatch.setattr("sys.argv", ["blender", "-b", "--", "info", "--json"])
+    assert addon.batch() == 0
+    info = json.loads(capfd.readouterr().out)
+    assert info["scene"] == "Scene" and info["frames"]["end"] == 3

@@ -1,0 +1,289 @@
+"""The artist panel and ``bpy.ops.xsl.*`` in the bpy module: the panel draws every setting
+and button, each operator fills its images from the same renders the command line makes and
+leaves the scene as it was, the modal path steps and cancels cleanly, bad input is a
+reason or a report, never a traceback."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from fog_scene import build_fog_scene
+from ui_stub import draw
+
+from xsl_render.core.panel_settings import PRESETS, SETTING_NAMES, builtin_defaults, map_options
+
+pytestmark = [pytest.mark.blender, pytest.mark.render]
+
+W, H = 48, 27
+OPERATORS = ("compute_maps", "render_selective", "render_gold", "compare")
+
+
+@pytest.fixture(scope="module")
+def addon():
+    import xsl_render
+
+    xsl_render.register()
+    yield xsl_render
+    xsl_render.unregister()
+
+
+@pytest.fixture
+def fog(blender, addon):
+    scene = build_fog_scene(blender, W, H)
+    scene.xsl_render.max_spp = 4
+    scene.xsl_render.tile_size = 16
+    return scene
+
+
+def borrowed_settings(scene):
+    """Settings every render changes and must give back."""
+    scene.cycles.samples = 77
+    scene.cycles.seed = 5
+    scene.cycles.use_denoising = True
+    scene.cycles.use_adaptive_sampling = True
+    scene.render.use_border = True
+    scene.render.border_min_x, scene.render.border_max_x = 0.1, 0.6
+    scene.render.use_persistent_data = False
+    scene.render.filepath = "//renders/frame_"
+    scene.render.image_settings.file_format = "PNG"
+    scene.frame_current = 3
+
+
+def test_panel_draws_every_setting_and_button(blender, fog):
+    from xsl_render.addon import ui
+
+    context = SimpleNamespace(scene=fog, window_manager=blender.context.window_manager)
+    assert all(panel.poll(context) for panel in ui.CLASSES[1:])
+    log = []
+    for cls in ui.CLASSES:
+        log += draw(blender, cls, context)
+    log += draw(blender, ui.RENDER_PT_xsl_render, context, "draw_header_preset")
+    log += draw(blender, ui.RENDER_PT_xsl_render_animation, context, "draw_header")
+    drawn = {entry[2] for entry in log if entry[0] == "prop"}
+    assert set(SETTING_NAMES) | {"use_animation", "filepath"} <= drawn
+    buttons = [entry[1] for entry in log if entry[0] == "operator"]
+    assert {f"xsl.{name}" for name in OPERATORS} <= set(buttons)
+    presets = [entry[2].values["preset"] for entry in log if entry[1] == "xsl.apply_preset"]
+    assert presets == list(PRESETS)
+    assert ("menu", "XSL_MT_presets") in log
+
+    fog.xsl_render.use_animation = True
+    fog.xsl_render.filepath = "//anim/f_####.exr"
+    log = draw(blender, ui.RENDER_PT_xsl_render, context)
+    render = next(entry[2] for entry in log if entry[1] == "xsl.render_selective")
+    assert render.values == {"animation": True, "filepath": "//anim/f_####.exr"}
+
+    status = blender.context.window_manager.xsl_render_status
+    status.running, status.label, status.fraction, status.message = True, "XSL render", 0.25, "tile 2/8"
+    log = draw(blender, ui.RENDER_PT_xsl_render, context)
+    assert ("progress", 0.25, "XSL render: tile 2/8") in log
+    status.running = False
+
+    fog.render.engine = "BLENDER_EEVEE"
+    assert not any(panel.poll(context) for panel in ui.CLASSES[1:])
+
+
+def test_preferences_hold_every_default(blender, addon):
+    from ui_stub import StubLayout
+
+    from xsl_render.addon.preferences import XSL_AP_preferences
+
+    log = []
+    prefs = SimpleNamespace(layout=StubLayout(blender, log), bl_rna=XSL_AP_preferences.bl_rna)
+    XSL_AP_preferences.draw(prefs, blender.context)
+    assert [entry[2] for entry in log if entry[0] == "prop"] == list(SETTING_NAMES)
+    defaults = {name: XSL_AP_preferences.bl_rna.properties[name].default for name in SETTING_NAMES}
+    assert defaults == pytest.approx(builtin_defaults())
+
+
+def test_operators_show_the_command_line_results_and_restore_the_scene(blender, fog):
+    from xsl_render.addon.director_maps import compute_maps
+    from xsl_render.addon.image_display import read_pixels
+    from xsl_render.addon.scene_state import settings_dump
+    from xsl_render.addon.selective_render import render_gold
+    from xsl_render.core.render_options import RenderOptions
+
+    borrowed_settings(fog)
+    before = settings_dump(fog)
+    images = blender.data.images
+    for name in OPERATORS:
+        assert getattr(blender.ops.xsl, name)() == {"FINISHED"}, name
+        assert settings_dump(fog) == before, name
+    maps = compute_maps(fog, map_options(fog.xsl_render))
+    for key, name in (("x", "XSL X map"), ("s", "XSL S map"), ("l", "XSL L map"), ("xsl", "XSL XSL map")):
+        image = images[name]
+        assert tuple(image.size) == (W, H) and image.colorspace_settings.name == "Non-Color"
+        np.testing.assert_allclose(read_pixels(image)[..., 0], maps.director(key), atol=1e-6)
+    # Blender counts rows from the bottom: its first pixel is our last row's first pixel.
+    assert images["XSL X map"].pixels[0] == pytest.approx(float(maps.x[-1, 0]), abs=1e-6)
+
+    gold = render_gold(fog, RenderOptions(max_spp=4))
+    np.testing.assert_array_equal(read_pixels(images["XSL Gold"]), gold.image)
+    render, samples = read_pixels(images["XSL Render"]), read_pixels(images["XSL Samples"])[..., 0]
+    assert render.shape == (H, W, 4) and np.isfinite(render).all()
+    assert images["XSL Render"]["mean_spp"] == pytest.approx(4 * samples.mean(), rel=1e-5)
+    counts = 4 * samples                                       # the image holds spp / max_spp
+    assert 1 <= counts.min() < counts.max() <= 4 and np.array_equal(counts, np.rint(counts))
+    heatmap = images["XSL FLIP heatmap"]
+    assert 0.0 < heatmap["mean_flip"] < 1.0 and heatmap["mse"] > 0.0 and tuple(heatmap.size) == (W, H)
+    assert not any(image.name == "Render Result" for image in images)
+
+
+def test_gold_in_bands_is_bit_identical_to_one_render(fog):
+    from xsl_render.addon.banded_gold import gold_band_steps
+    from xsl_render.addon.selective_render import render_gold
+    from xsl_render.core.progress import run_steps
+    from xsl_render.core.render_options import RenderOptions
+
+    options = RenderOptions(max_spp=4, seed=3)
+    steps = []
+    banded = run_steps(gold_band_steps(fog, options, budget=1), lambda f, m: steps.append(m))
+    assert banded.stats["bands"]["count"] == 2 and banded.stats["renders"] == 2
+    np.testing.assert_array_equal(banded.image, render_gold(fog, options).image)
+    assert banded.stats["total_samples"] == W * H * 4
+
+
+class FakeWindowManager:
+    def __init__(self, bpy):
+        self.xsl_render_status = bpy.context.window_manager.xsl_render_status
+        self.progress, self.timers = [], 0
+
+    def event_timer_add(self, seconds, window=None):
+        self.timers += 1
+        return object()
+
+    def event_timer_remove(self, timer):
+        self.timers -= 1
+
+    def modal_handler_add(self, operator):
+        pass
+
+    def progress_begin(self, low, high):
+        pass
+
+    def progress_update(self, value):
+        self.progress.append(value)
+
+    def progress_end(self):
+        self.progress.append("end")
+
+
+def modal_harness(bpy, make_job):
+    """The panel operators' modal machinery on a plain object: Blender cannot open a window
+    in the bpy module, so the window, its timer and the status bar are stand-ins."""
+    from xsl_render.operators.job_operator import JobOperator
+
+    class Harness(JobOperator):
+        reports: list = []
+
+        def in_one_go(self, context):
+            return False
+
+        def report(self, kind, message):
+            self.reports.append((next(iter(kind)), message))
+
+        def make_job(self, context, modal):
+            assert modal
+            return make_job(context.scene)
+
+    status_texts = []
+    workspace = SimpleNamespace(status_text_set=status_texts.append)
+    context = SimpleNamespace(scene=bpy.context.scene, window=object(), window_manager=FakeWindowManager(bpy),
+                              workspace=workspace, screen=None)
+    return Harness(), context, status_texts
+
+
+def test_modal_run_steps_tile_by_tile_and_esc_restores(blender, fog):
+    from xsl_render.addon.scene_state import settings_dump
+    from xsl_render.operators import job_operator
+    from xsl_render.operators.jobs import selective_job
+
+    borrowed_settings(fog)
+    before = settings_dump(fog)
+    operator, context, status_texts = modal_harness(blender, selective_job)
+    timer = SimpleNamespace(type="TIMER", value="NOTHING")
+    assert operator.invoke(context, None) == {"RUNNING_MODAL"}
+    assert job_operator.running_label() == "XSL render"
+    assert not blender.ops.xsl.render_gold.poll()                  # one job at a time
+    ticks, answer = 0, {"PASS_THROUGH"}
+    while answer == {"PASS_THROUGH"}:
+        # Between ticks Blender redraws and reads events: edits wait, navigation passes.
+        assert operator.modal(context, SimpleNamespace(type="G", value="PRESS")) == {"RUNNING_MODAL"}
+        assert operator.modal(context, SimpleNamespace(type="WHEELUPMOUSE", value="PRESS")) == {"PASS_THROUGH"}
+        answer = operator.modal(context, timer)
+        ticks += 1
+    assert answer == {"FINISHED"}
+    renders = blender.data.images["XSL Render"]["renders"]
+    assert ticks >= 5 + 2 * renders            # maps phase by phase, each tile before and after
+    progress = [value for value in context.window_manager.progress if value != "end"]
+    assert progress == sorted(progress) and context.window_manager.progress[-1] == "end"
+    assert any("tile" in text and "ESC" in text for text in status_texts if text) and status_texts[-1] is None
+    assert context.window_manager.timers == 0 and job_operator.running_label() is None
+    assert operator.reports[-1][0] == "INFO" and "XSL" in operator.reports[-1][1]
+    assert blender.context.window_manager.xsl_render_status.last_report == operator.reports[-1][1]
+    assert settings_dump(fog) == before
+
+    blender.data.images["XSL Render"]["mean_spp"] = -1.0      # a cancelled run leaves it alone
+    operator, context, _ = modal_harness(blender, selective_job)
+    operator.invoke(context, None)
+    while "tile 2/" not in operator._runner.message:         # into the tile renders
+        assert operator.modal(context, timer) == {"PASS_THROUGH"}
+    assert settings_dump(fog) != before                        # the render borrows settings
+    assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"}
+    assert settings_dump(fog) == before
+    assert operator.reports[-1] == ("WARNING", "XSL render cancelled; the scene is as it was")
+    assert blender.data.images["XSL Render"]["mean_spp"] == -1.0
+    assert job_operator.running_label() is None and context.window_manager.timers == 0
+
+
+def poll_message(bpy, name: str) -> str:
+    with pytest.raises(RuntimeError) as error:
+        getattr(bpy.ops.xsl, name)()
+    return str(error.value)
+
+
+def test_bad_input_is_a_reason_or_a_report_never_a_traceback(blender, fog, monkeypatch, capfd):
+    from xsl_render.operators import job_operator
+
+    for name in OPERATORS[:3]:
+        fog.render.engine = "BLENDER_EEVEE"
+        assert "XSL Render drives Cycles (set Render Engine to Cycles)" in poll_message(blender, name)
+        fog.render.engine = "CYCLES"
+        camera, fog.camera = fog.camera, None
+        assert "The scene has no active camera" in poll_message(blender, name)
+        fog.camera = camera
+        monkeypatch.setattr(job_operator, "render_job_running", lambda: True)
+        assert "A render is running: wait for it to finish" in poll_message(blender, name)
+        monkeypatch.undo()
+        monkeypatch.setitem(job_operator._running, "label", "Gold render")
+        assert "XSL Render is busy (Gold render)" in poll_message(blender, name)
+        monkeypatch.undo()
+    assert "Render 'XSL Gold' and 'XSL Render' first" in poll_message(blender, "compare")
+
+    fog.xsl_render.min_spp = 8                                 # above max_spp = 4
+    assert "--min-spp 8 is larger than --max-spp 4" in poll_message(blender, "render_selective")
+    fog.xsl_render.min_spp = 1
+    fog.xsl_render.wx = fog.xsl_render.ws = 0.0
+    assert "--wx and --ws cannot both be 0" in poll_message(blender, "compute_maps")
+    fog.xsl_render.wx = 0.5
+    fog.xsl_render.tile_size = 64                               # larger than the 48x27 frame
+    assert "--tile-size 64 is larger than the 48x27 frame" in poll_message(blender, "render_selective")
+    assert job_operator.running_label() is None
+    assert "Traceback" not in capfd.readouterr().err
+
+
+def test_presets_follow_the_paper_and_defaults_come_back(blender, fog):
+    settings = fog.xsl_render
+    for key, preset in PRESETS.items():
+        assert blender.ops.xsl.apply_preset(preset=key) == {"FINISHED"}
+        for name, value in preset.values.items():
+            assert getattr(settings, name) == pytest.approx(value), (key, name)
+    assert blender.ops.xsl.apply_preset(preset="THICK_FOG") == {"FINISHED"}
+    options = map_options(settings)
+    assert (options.light_n, options.light_sigma_base) == (16, 8.0)
+    assert blender.ops.xsl.apply_preset(preset="NIGHT_ROAD") == {"FINISHED"}
+    assert map_options(settings).light_n is None                 # auto: per lamp
+    settings.max_spp, settings.xs_op = 999, "MULTIPLY"
+    assert blender.ops.xsl.reset_settings() == {"FINISHED"}
+    assert {name: getattr(settings, name) for name in SETTING_NAMES} == pytest.approx(builtin_defaults())
