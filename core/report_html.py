@@ -103,11 +103,12 @@ def _metric(run: dict, metric: str, key: str, digits: int = 2, suffix: str = "%"
     if summary.get("skipped"):
         return f"<td class=skip title='{escape(summary['skipped'], quote=True)}'>skipped</td>"
     value = summary.get(key)
-    if value is None:
-        return "<td class=skip>-</td>"
-    # Small errors keep three significant digits (0.0042%, not 0.00%).
-    text = f"{value:.{digits}f}" if abs(value) >= 10 ** (1 - digits) or value == 0 else f"{value:.3g}"
-    return f"<td>{text}{suffix}</td>"
+    return "<td class=skip>-</td>" if value is None else f"<td>{_number(value, digits)}{suffix}</td>"
+
+
+def _number(value: float, digits: int = 2) -> str:
+    """``digits`` decimals, but small values keep three significant digits (0.0042, not 0.00)."""
+    return f"{value:.{digits}f}" if abs(value) >= 10 ** (1 - digits) or value == 0 else f"{value:.3g}"
 
 
 def _paper_tables(scenes: dict) -> str:
@@ -289,5 +290,6 @@ def _heatmap_cell(run: dict, metric: str, out_dir: Path, reference: bool) -> str
     path = run.get("heatmaps", {}).get(metric)
     if not path:
         return "<div class=note>-</div>"
-    caption = f"{summary.get('average_error_percent', 0):.2f}% avg, {summary.get('error_pixel_percent', 0):.2f}% error px"
+    caption = (f"{_number(summary.get('average_error_percent', 0))}% avg, "
+               f"{_number(summary.get('error_pixel_percent', 0))}% error px")
     return _img(out_dir / path, caption)
