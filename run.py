@@ -80,8 +80,7 @@ def main(argv: list[str]) -> int:
     ensure_venv()
     job, rest = argv[0], argv[1:]
     if job == "demo":
-        # Until the selective renderer lands, the main job describes the road scene.
-        command = [str(venv_bin("xsl-render")), "info", str(ROOT / "example_blends" / "road.blend"), *rest]
+        command = [str(venv_bin("xsl-render")), "demo", *rest]
     else:
         ensure_browser()
         command = [str(venv_bin("python")), "-m", "pytest", *rest]

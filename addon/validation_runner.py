@@ -1,0 +1,289 @@
+"""The objective validation of the paper (sections 5 and 6.1) on real scenes, resumable.
+
+For each scene: the director maps, the gold standard, the selective renders (X only, S only,
+XS, XSL, XSL without MinBound where asked), uniform and Cycles adaptive sampling at the wall
+time the XSL run took (maps included), and MSE, FLIP and VDP of each against the gold
+standard. Every finished step is kept on disk with the hash of its inputs
+(``core.validation_store``) and reused by the next run, so a run killed midway continues.
+"""
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from ..core.director import xs_map, xsl_map
+from ..core.errors import Cancelled
+from ..core.files import write_json
+from ..core.imageio import write_exr, write_png
+from ..core.map_files import read_map_set, write_map_set
+from ..core.map_options import MapOptions
+from ..core.render_options import RenderOptions
+from ..core.validation_compare import compare_with_gold
+from ..core.validation_plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
+                                    map_seconds, scaled_size, scene_variants)
+from ..core.validation_results import scene_summary
+from ..core.validation_store import file_sha256, inputs_hash, read_record, write_record
+from ..core.vdp import vdp_unavailable_reason
+
+Progress = Callable[[float, str], "bool | None"]
+#: Relative cost of each step, in gold renders, for the overall progress fraction.
+STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4,
+                "metrics": 0.1}
+
+
+@dataclass(frozen=True)
+class SceneJob:
+    """A scene to validate.
+
+    ``name`` names its folder and its section of the report; ``max_spp`` overrides the
+    settings' ceiling for this scene (one .blend can be validated at two ceilings under two
+    names); ``compare_minbound`` also renders XSL without MinBound (the paper's road scene).
+    """
+
+    name: str
+    path: Path
+    max_spp: int | None = None
+    compare_minbound: bool = False
+
+    def variants(self, settings: ValidationSettings) -> list[Variant]:
+        return scene_variants(settings.variants, self.compare_minbound)
+
+
+class _Steps:
+    """Overall progress over steps of unequal weight; a True answer from the callback
+    (Ctrl-C) stops the run between steps and inside renders (``core.progress``)."""
+
+    def __init__(self, callback: Progress | None, weights: list[float]):
+        self.callback = callback
+        self.total = sum(weights) or 1.0
+        self.weights = weights
+        self.done = 0.0
+        self.index = 0
+
+    def sub(self, label: str, echo: str = "") -> Progress:
+        """A callback for the current step; ``echo`` is a prefix of the step's own messages
+        that the label already says (the render functions start theirs with the mode)."""
+        start, weight = self.done, self.weights[self.index]
+
+        def report(fraction: float, message: str):
+            if self.callback is None:
+                return False
+            if echo and message.startswith(echo):
+                message = message[len(echo):]
+            return self.callback((start + weight * min(1.0, max(0.0, fraction))) / self.total,
+                                 f"{label}: {message}")
+        return report
+
+    def begin(self, label: str) -> None:
+        if self.callback is not None and self.callback(self.done / self.total, label):
+            raise Cancelled("cancelled")
+
+    def finish(self) -> None:
+        self.done += self.weights[self.index]
+        self.index += 1
+
+
+def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[float]:
+    """The steps' weights, in plan order; a render costs in proportion to its ceiling."""
+    weights = []
+    for job in jobs:
+        variants = job.variants(settings)
+        ceiling = (job.max_spp or settings.max_spp) / settings.max_spp
+        weights += [STEP_WEIGHTS["maps"]] * len({v.map_options.minbound for v in variants if v.map_options})
+        weights += [STEP_WEIGHTS[v.kind] * ceiling for v in variants]
+        weights += [STEP_WEIGHTS["metrics"]] * (len(variants) - 1)
+    return weights
+
+
+def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: str | Path,
+                   progress: Progress | None = None) -> dict:
+    """Validate every scene in ``jobs`` into ``out_dir``; returns (and writes) results.json.
+
+    The result holds, per scene, each variant's timing, samples and metrics, whether the
+    render was made now or reused, and the paths of its files relative to ``out_dir``.
+    """
+    import bpy  # noqa: F401  (the session the scenes are opened in)
+
+    out_dir = Path(out_dir)
+    vdp_reason = None if settings.vdp else "not requested (--no-vdp)"
+    if vdp_reason is None:
+        vdp_reason = vdp_unavailable_reason()
+    results = {"settings": settings.to_dict(),
+               "vdp": {"ran": vdp_reason is None, "skipped": vdp_reason},
+               "scenes": {}, "rendered": 0, "reused": 0}
+    steps = _Steps(progress, plan_weights(jobs, settings))
+    for job in jobs:
+        options = settings.render_options(job.max_spp)
+        results["scenes"][job.name] = _SceneRun(job, settings, options, out_dir, steps, results).run()
+        write_json(out_dir / "results.json", results)
+    return results
+
+
+class _SceneRun:
+    def __init__(self, job: SceneJob, settings: ValidationSettings, options: RenderOptions,
+                 out_dir: Path, steps: _Steps, results: dict):
+        self.job, self.settings, self.options = job, settings, options
+        self.out_dir, self.steps, self.results = out_dir, steps, results
+        self.folder = out_dir / job.name
+        self.records: dict[str, dict] = {}
+        self.maps: dict[bool, tuple] = {}
+        self.warnings: list[str] = []
+        self.reused: set[str] = set()
+        self.scene = None
+        self.warm = False
+
+    # -- helpers --------------------------------------------------------------------------
+    def rel(self, path: Path) -> str:
+        return Path(path).relative_to(self.out_dir).as_posix()
+
+    def open_scene(self, warm: bool = True):
+        """Open the .blend the first time a step needs Blender (a fully reused scene with a
+        given resolution never does)."""
+        if self.scene is None:
+            from .blend_session import open_blend
+
+            self.scene = open_blend(self.job.path)
+        if warm and not self.warm:
+            from .selective_render import render_uniform
+
+            # One tiny render first, so that no timed render pays Cycles' one-time start-up.
+            render_uniform(self.scene, RenderOptions(max_spp=1, resolution=(8, 8)), spp=1)
+            self.warm = True
+        return self.scene
+
+    # -- the scene ------------------------------------------------------------------------
+    def run(self) -> dict:
+        self.sha256 = file_sha256(self.job.path)
+        self.size = self.settings.resolution or scaled_size(self.scene_size(), self.settings.longest_side)
+        variants = self.job.variants(self.settings)
+        for minbound in dict.fromkeys(v.map_options.minbound for v in variants if v.map_options):
+            self.maps[minbound] = self.director_maps(minbound)
+        for variant in variants:
+            self.records[variant.name] = self.render(variant)
+        for variant in variants:
+            if variant.name != GOLD:
+                self.compare(variant)
+        return scene_summary(self.job, self.sha256, self.size, self.options, variants, self.records,
+                             {mb: info for mb, (_, _, info) in self.maps.items()}, self.warnings,
+                             self.reused)
+
+    def scene_size(self) -> tuple[int, int]:
+        """The scene's own render size (opens the .blend, renders nothing)."""
+        from .scene_probe import render_size
+
+        return render_size(self.open_scene(warm=False))
+
+    # -- maps -----------------------------------------------------------------------------
+    def director_maps(self, minbound: bool):
+        folder = self.folder / ("maps" if minbound else "maps_no_minbound")
+        map_options = MapOptions(minbound=minbound)
+        inputs = {"step": "maps", "scene_sha256": self.sha256, "size": list(self.size),
+                  "map_options": map_options.to_dict()}
+        digest = inputs_hash(inputs)
+        self.steps.begin(f"{self.job.name}: maps")
+        record = read_record(folder / "inputs.json", digest,
+                             tuple(folder / f"{n}.exr" for n in ("x", "s", "l", "xs", "xsl")))
+        if record is not None:
+            maps = read_map_set(folder)
+            self.results["reused"] += 1
+        else:
+            from .director_maps import compute_maps
+
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                maps = compute_maps(self.open_scene(), map_options, size=self.size,
+                                    cache_dir=self.folder / "cache",
+                                    progress=self.steps.sub(f"{self.job.name}: maps"))
+            self.warnings += [str(w.message) for w in caught]
+            write_map_set(folder, maps)
+            write_record(folder / "inputs.json", {"inputs": inputs, "input_hash": digest})
+            self.results["rendered"] += 1
+        self.steps.finish()
+        info = {"folder": self.rel(folder), "seconds": maps.info.get("seconds", {}),
+                "lights": maps.info.get("l", {}), "warnings": maps.info.get("warnings", []),
+                "minbound": minbound}
+        return maps, digest, info
+
+    def director(self, variant: Variant):
+        maps, digest, _ = self.maps[variant.map_options.minbound]
+        o = variant.map_options
+        xs = xs_map(maps.x, maps.s, o.wx, o.ws, o.xs_op)
+        director = xs if variant.director == "xs" else xsl_map(xs, maps.l, o.wxs, o.wl, o.xsl_op)
+        return director, digest, map_seconds(variant, maps.info.get("seconds", {}))
+
+    # -- renders --------------------------------------------------------------------------
+    def render_inputs(self, variant: Variant) -> dict:
+        inputs = {"step": "render", "scene_sha256": self.sha256, "size": list(self.size),
+                  "variant": variant.to_dict(), "options": self.options.to_dict()}
+        if variant.kind == "selective":
+            inputs["maps_hash"] = self.maps[variant.map_options.minbound][1]
+        if variant.equal_time:
+            # XSL's wall time, maps included, without its denoising pass: the baseline's
+            # time limit covers its rendering, and its own denoising pass comes on top.
+            source = self.records[EQUAL_TIME_SOURCE]
+            stats = source["stats"]
+            inputs["budget_s"] = stats["wall_s"] - stats["phases_s"].get("denoise", 0.0)
+            inputs["budget_from_hash"] = source["input_hash"]
+        return inputs
+
+    def render(self, variant: Variant) -> dict:
+        from . import selective_render as sr
+
+        exr = self.folder / f"{variant.name}.exr"
+        spp_exr, spp_png = exr.with_name(f"{variant.name}_spp.exr"), exr.with_name(f"{variant.name}_spp.png")
+        inputs = self.render_inputs(variant)
+        digest = inputs_hash(inputs)
+        label = f"{self.job.name}: {variant.name}"
+        self.steps.begin(label)
+        record = read_record(exr.with_suffix(".json"), digest, (exr, spp_exr, spp_png))
+        if record is not None:
+            self.results["reused"] += 1
+            self.reused.add(variant.name)
+            self.steps.finish()
+            return record
+        options = RenderOptions(**{**self.options.to_dict(), "resolution": tuple(self.size)}).check()
+        scene, progress = self.open_scene(), self.steps.sub(label, echo=f"{variant.kind}: ")
+        if variant.kind == "gold":
+            outcome = sr.render_gold(scene, options, progress=progress)
+        elif variant.kind == "selective":
+            director, _, seconds = self.director(variant)
+            outcome = sr.render_selective(scene, director, options, progress=progress,
+                                          mode=variant.name, map_seconds=seconds)
+        elif variant.kind == "uniform":
+            outcome = sr.render_uniform(scene, options, seconds=inputs["budget_s"], progress=progress)
+        else:
+            outcome = sr.render_adaptive(scene, options, inputs["budget_s"], progress=progress)
+        self.warnings += outcome.warnings
+        started = time.perf_counter()
+        attributes = {"xsl_render:mode": variant.name, "xsl_render:max_spp": options.max_spp}
+        write_exr(exr, outcome.image, ["R", "G", "B", "A"], attributes=attributes)
+        write_exr(spp_exr, outcome.samples, ["Y"], attributes=attributes)
+        write_png(spp_png, outcome.samples / float(options.max_spp))
+        outcome.stats["write_s"] = time.perf_counter() - started     # not part of the timing
+        record = {"inputs": inputs, "input_hash": digest, "stats": outcome.stats,
+                  "files": {"image": self.rel(exr), "spp": self.rel(spp_exr), "spp_png": self.rel(spp_png)}}
+        write_record(exr.with_suffix(".json"), record)
+        self.results["rendered"] += 1
+        self.steps.finish()
+        return record
+
+    # -- metrics --------------------------------------------------------------------------
+    def compare(self, variant: Variant) -> None:
+        record, gold = self.records[variant.name], self.records[GOLD]
+        digest = inputs_hash({"step": "metrics", "render": record["input_hash"],
+                              "gold": gold["input_hash"], "vdp": self.settings.vdp})
+        label = f"{self.job.name}: metrics of {variant.name}"
+        self.steps.begin(label)
+        heatmaps = record.get("comparison", {}).get("heatmaps", {})
+        if record.get("metrics_hash") != digest or not all(
+                (self.out_dir / p).is_file() for p in heatmaps.values()):
+            comparison = compare_with_gold(self.out_dir / gold["files"]["image"],
+                                           self.out_dir / record["files"]["image"],
+                                           self.folder / "heatmaps" / variant.name, vdp=self.settings.vdp)
+            comparison["heatmaps"] = {k: self.rel(Path(v)) for k, v in comparison["heatmaps"].items()}
+            record.update(comparison=comparison, metrics_hash=digest)
+            write_record(self.folder / f"{variant.name}.json", record)
+        self.steps.finish()

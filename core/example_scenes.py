@@ -1,0 +1,59 @@
+"""The bundled example scenes (the paper's four: balls A, balls B, a statue for Lucy, road) and
+how a command names scenes: an example's name, or the path of any .blend file."""
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+from .errors import InputError
+
+EXAMPLE_SCENES = ("balls_a", "balls_b", "statue", "road")
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+
+
+def example_folders() -> list[Path]:
+    """Where example_blends/ may be: next to the package (a source checkout, where the package
+    is the repository itself) and under the current folder."""
+    package = Path(__file__).resolve().parent.parent
+    return list(dict.fromkeys([package / "example_blends", Path.cwd() / "example_blends"]))
+
+
+def example_scene_path(name: str) -> Path:
+    """The .blend of a bundled example; InputError (one line) when it is not there."""
+    for folder in example_folders():
+        path = folder / f"{name}.blend"
+        if path.is_file():
+            return path
+    raise InputError(f"example scene '{name}' not found: no {name}.blend in "
+                     f"{' or '.join(str(f) for f in example_folders())} (example_blends/README.md "
+                     "says how to build it)")
+
+
+def resolve_scenes(text: str | None) -> list[tuple[str, Path]]:
+    """'balls_a,road' or 'scene.blend,...' -> [(name, path)]; None means all four examples.
+
+    A name is reported as is; a path under its file stem. Names must be unique, because each
+    scene gets a folder of that name.
+    """
+    items = list(EXAMPLE_SCENES) if text is None else [s.strip() for s in text.split(",") if s.strip()]
+    if not items:
+        raise InputError("--scenes is empty")
+    scenes: list[tuple[str, Path]] = []
+    for item in items:
+        if item.lower().endswith(".blend") or os.sep in item or "/" in item:
+            path = Path(item)
+            if not path.is_file():
+                raise InputError(f"no such scene file: {item}")
+            name = path.stem
+        elif item in EXAMPLE_SCENES:
+            name, path = item, example_scene_path(item)
+        else:
+            raise InputError(f"unknown scene '{item}' (examples: {', '.join(EXAMPLE_SCENES)}; "
+                             "or give the path of a .blend file)")
+        if not _NAME.match(name):
+            raise InputError(f"scene name '{name}' must be letters, digits, '_' or '-' (it names a folder)")
+        if name in (n for n, _ in scenes):
+            raise InputError(f"scene '{name}' is given twice")
+        scenes.append((name, path))
+    return scenes

@@ -1,0 +1,167 @@
+"""What the objective validation renders per scene (paper sections 5 and 6.1), and the
+equal-time baselines the paper does not have.
+
+Per scene, every image is compared with the gold standard (the ceiling of samples in every
+pixel). The paper's versions are the X map alone, XS(1, 0, +), the saliency map alone,
+XS(0, 1, +), the XS map and, for the road scene, the XSL map with and without MinBound.
+Ours add two renders that cost the same wall time as the XSL run (maps included): uniform
+sampling and Cycles' own adaptive sampling, what a Blender user would do instead.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import InputError
+from .map_options import MapOptions
+
+GOLD = "gold"
+#: The run whose wall time (maps included) the equal-time baselines get.
+EQUAL_TIME_SOURCE = "xsl"
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One image of a scene.
+
+    Attributes
+    ----------
+    name : file stem and key in results.json.
+    label : what the report calls it (the paper's notation where it has one).
+    kind : "gold", "selective", "uniform" or "adaptive".
+    director : for selective runs, "xs" or "xsl": which combination of the maps directs it.
+    map_options : the weights and operators of that combination and whether X uses MinBound.
+    """
+
+    name: str
+    label: str
+    kind: str
+    director: str | None = None
+    map_options: MapOptions | None = None
+
+    @property
+    def equal_time(self) -> bool:
+        return self.kind in ("uniform", "adaptive")
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "label": self.label, "kind": self.kind, "director": self.director,
+                "map_options": self.map_options.to_dict() if self.map_options else None}
+
+
+_PAPER = MapOptions()
+VARIANTS = {
+    v.name: v for v in (
+        Variant(GOLD, "Gold standard", "gold"),
+        Variant("x_only", "X only: XS(1, 0, +)", "selective", "xs", MapOptions(wx=1.0, ws=0.0)),
+        Variant("s_only", "S only: XS(0, 1, +)", "selective", "xs", MapOptions(wx=0.0, ws=1.0)),
+        Variant("xs", "XS(0.5, 0.5, +)", "selective", "xs", _PAPER),
+        Variant("xsl", "XSL(0.5, 0.5, +)", "selective", "xsl", _PAPER),
+        Variant("xsl_no_minbound", "XSL without MinBound", "selective", "xsl",
+                MapOptions(minbound=False)),
+        Variant("uniform_equal_time", "Uniform, XSL's time", "uniform"),
+        Variant("adaptive_equal_time", "Cycles adaptive, XSL's time", "adaptive"),
+    )
+}
+#: Every variant but the MinBound comparison, which only some scenes get.
+DEFAULT_VARIANTS = ("gold", "x_only", "s_only", "xs", "xsl", "uniform_equal_time", "adaptive_equal_time")
+#: Scenes that also get XSL without MinBound (the paper's road scene, the one with sky).
+DEFAULT_MINBOUND_SCENES = ("road",)
+
+
+def parse_variants(text: str | None) -> tuple[str, ...]:
+    """'gold,xs,xsl' -> the variants in plan order; the gold standard is always in (every
+    metric compares with it), and equal-time runs bring the XSL run they take their time from."""
+    if text is None:
+        return DEFAULT_VARIANTS
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in VARIANTS]
+    if unknown or not names:
+        raise InputError(f"--variants: unknown variant '{unknown[0] if unknown else text}' "
+                         f"(choose from {', '.join(VARIANTS)})")
+    wanted = {GOLD, *names}
+    if any(VARIANTS[name].equal_time for name in names):
+        wanted.add(EQUAL_TIME_SOURCE)
+    return tuple(name for name in VARIANTS if name in wanted)
+
+
+def scene_variants(variants: tuple[str, ...], compare_minbound: bool = False) -> list[Variant]:
+    """The variants one scene renders, in order: gold first, selective runs, then the
+    equal-time baselines (which need the XSL run's time). ``compare_minbound`` adds XSL
+    without MinBound when XSL is rendered."""
+    names = set(variants)
+    if compare_minbound and EQUAL_TIME_SOURCE in names:
+        names.add("xsl_no_minbound")
+    return [variant for name, variant in VARIANTS.items() if name in names]
+
+
+def maps_needed(variant: Variant) -> tuple[str, ...]:
+    """The maps a selective run waits for, so its time counts only what it uses (Fig. 8
+    includes map generation): S is computed from the snapshot and the inverted X map."""
+    options = variant.map_options
+    if variant.kind != "selective" or options is None:
+        return ()
+    needed = ["x"]
+    if options.ws > 0 or variant.director == "xsl":
+        needed += ["snapshot", "s"]
+    needed.append("xs")
+    if variant.director == "xsl":
+        needed += ["l", "xsl"]
+    return tuple(needed)
+
+
+def map_seconds(variant: Variant, seconds: dict) -> float:
+    """Seconds the maps of ``variant`` took, from the per-map seconds of maps.json."""
+    return float(sum(float(seconds.get(name, 0.0)) for name in maps_needed(variant)))
+
+
+def scaled_size(size: tuple[int, int], longest_side: int | None) -> tuple[int, int]:
+    """``size`` scaled (aspect kept, rounded) so that its longer side is ``longest_side``."""
+    width, height = size
+    if longest_side is None:
+        return width, height
+    scale = longest_side / max(width, height)
+    return max(1, round(width * scale)), max(1, round(height * scale))
+
+
+def parse_list(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
+    """'a,b' -> ('a', 'b'); None -> default."""
+    if text is None:
+        return default
+    return tuple(item.strip() for item in text.split(",") if item.strip())
+
+
+@dataclass(frozen=True)
+class ValidationSettings:
+    """The knobs of one validation run (the paper: 16 spp ceiling, 512 px on the longer side).
+
+    ``resolution`` renders every scene at that size; else ``longest_side`` scales each scene's
+    own resolution to that many pixels on its longer side (the paper's "512 pixels in their
+    largest side"); with neither, each scene renders at its own. ``vdp`` False reports VDP as
+    skipped (it is slow, and optional anyway). ``denoise`` denoises every finished frame, gold
+    and the others alike (``RenderOptions.denoise``).
+    """
+
+    max_spp: int = 16
+    resolution: tuple[int, int] | None = None
+    longest_side: int | None = None
+    min_spp: int = 1
+    tile_size: int = 32
+    seed: int = 0
+    vdp: bool = True
+    denoise: bool = True
+    variants: tuple[str, ...] = DEFAULT_VARIANTS
+
+    def render_options(self, max_spp: int | None = None):
+        """The RenderOptions of every render (``max_spp`` overrides the ceiling for one scene)."""
+        from .render_options import RenderOptions
+
+        if self.longest_side is not None and not 8 <= self.longest_side <= 16384:
+            raise InputError(f"--size must be between 8 and 16384 pixels (got {self.longest_side})")
+        return RenderOptions(max_spp=max_spp or self.max_spp, min_spp=self.min_spp,
+                             tile_size=self.tile_size, seed=self.seed,
+                             resolution=self.resolution, denoise=self.denoise).check()
+
+    def to_dict(self) -> dict:
+        return {"max_spp": self.max_spp, "resolution": list(self.resolution) if self.resolution else None,
+                "longest_side": self.longest_side,
+                "min_spp": self.min_spp, "tile_size": self.tile_size, "seed": self.seed,
+                "vdp": self.vdp, "denoise": self.denoise, "variants": list(self.variants)}

@@ -1,0 +1,77 @@
+"""The validation's files on disk, so that a run killed midway continues where it stopped.
+
+Layout of the output folder::
+
+    DIR/results.json                    every number of every scene (rewritten as runs finish)
+    DIR/report.html                     the report (core.report_html)
+    DIR/<scene>/maps/                   xsl-render maps output + inputs.json (its input hash)
+    DIR/<scene>/maps_no_minbound/       the same without MinBound (scenes that compare it)
+    DIR/<scene>/<variant>.exr           the render, RGBA scene-linear
+    DIR/<scene>/<variant>_spp.exr/.png  samples per pixel (the PNG's grey is spp / max_spp)
+    DIR/<scene>/<variant>.json          the run's record: inputs, their hash, stats, metrics
+    DIR/<scene>/heatmaps/<variant>_<metric>.png
+
+A record is written last, after the images it describes, and every file goes through a
+temporary name (``core.files``), so a record on disk always means finished images. A
+finished step is reused when the hash of its inputs (the scene file's own hash, the mode,
+the options, the hash of what it was compared with) equals the hash stored with it.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+from .errors import InputError
+from .files import write_json
+
+#: Bumped when a change to the pipeline makes old renders or metrics incomparable.
+PIPELINE_VERSION = 1
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """SHA-256 of a file's bytes (a .blend changes hash whenever it is saved differently)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def inputs_hash(inputs: dict) -> str:
+    """A stable hash of JSON-ready inputs (keys sorted, floats as JSON writes them)."""
+    text = json.dumps({"pipeline": PIPELINE_VERSION, **inputs}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def read_record(path: str | os.PathLike, expected_hash: str, needs: tuple[Path, ...] = ()) -> dict | None:
+    """The record at ``path`` if it was made from inputs with ``expected_hash`` and every file
+    in ``needs`` exists; None otherwise (missing, stale, unreadable: the step runs again)."""
+    path = Path(path)
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(record, dict) or record.get("input_hash") != expected_hash:
+        return None
+    if not all(Path(p).is_file() for p in needs):
+        return None
+    return record
+
+
+def write_record(path: str | os.PathLike, record: dict) -> Path:
+    return write_json(path, record)
+
+
+def check_output_folder(folder: str | os.PathLike) -> Path:
+    """InputError (one line) unless ``folder`` is, or can become, a writable folder."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--out {folder} is a file, not a folder")
+    existing = folder.absolute()
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write into {folder}: {existing} is not a writable folder")
+    return folder

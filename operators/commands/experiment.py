@@ -1,0 +1,133 @@
+"""``xsl-render experiment``: the paper's objective validation (Fig. 8, Tables I and II) on the
+example scenes, with FLIP and equal-time baselines, into DIR/results.json and DIR/report.html.
+
+Resumable: every finished map set, render and comparison is kept with the hash of its inputs
+and reused, so rerunning after Ctrl-C (or a crash) continues where it stopped.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+NAME = "experiment"
+HELP = ("render gold, X-only, S-only, XS, XSL and equal-time baselines of the example scenes, "
+        "measure time, MSE, VDP and FLIP, and write results.json and an HTML report (resumable)")
+
+
+def add_arguments(parser) -> None:
+    from ...core.validation_plan import DEFAULT_MINBOUND_SCENES, VARIANTS
+
+    parser.add_argument("--scenes", metavar="LIST",
+                        help="comma-separated example names (balls_a, balls_b, statue, road) or "
+                             ".blend paths (default: the four examples)")
+    parser.add_argument("--out", default="xsl-experiment", metavar="DIR",
+                        help="output folder; finished work in it is reused (default xsl-experiment)")
+    add_run_arguments(parser)
+    parser.add_argument("--variants", metavar="LIST",
+                        help=f"runs per scene (default all but xsl_no_minbound): {', '.join(VARIANTS)}; "
+                             "gold is always rendered")
+    parser.add_argument("--minbound-scenes", metavar="LIST", default=",".join(DEFAULT_MINBOUND_SCENES),
+                        help="scenes that also render XSL without MinBound (default road)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_run_arguments(parser) -> None:
+    """Ceiling, size, tiles, seed, denoising, VDP."""
+    parser.add_argument("--max-spp", type=int, default=16,
+                        help="samples per pixel of the gold standard and ceiling of the maps "
+                             "(default 16, the paper's)")
+    parser.add_argument("--resolution", metavar="WxH", help="render every scene at this size")
+    parser.add_argument("--size", type=int, metavar="N",
+                        help="scale each scene to N pixels on its longer side (the paper: 512; "
+                             "default: each scene's own resolution)")
+    parser.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
+    parser.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
+    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    add_quality_arguments(parser)
+
+
+def add_quality_arguments(parser) -> None:
+    """--denoise and --vdp, shared with ``demo``."""
+    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                        help="denoise every finished frame with Open Image Denoise, gold and "
+                             "selective alike (default on; off compares the raw path-traced frames)")
+    parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
+                        help="run ColorVideoVDP when it is installed (default on; it is slow)")
+
+
+def settings_from_args(args, variants=None):
+    from ...core.validation_plan import ValidationSettings, parse_variants
+    from .common import parse_resolution
+
+    if args.resolution and args.size:
+        from ...core.errors import InputError
+
+        raise InputError("give --resolution or --size, not both")
+    settings = ValidationSettings(
+        max_spp=args.max_spp, resolution=parse_resolution(args.resolution),
+        longest_side=args.size, min_spp=args.min_spp, tile_size=args.tile_size, seed=args.seed,
+        vdp=args.vdp, denoise=args.denoise,
+        variants=variants or parse_variants(getattr(args, "variants", None)))
+    settings.render_options()       # InputError for impossible options, before any work
+    return settings
+
+
+def run_and_report(jobs, settings, out: Path, label: str, quiet: bool) -> dict:
+    """Run the validation with a progress bar and Ctrl-C handling, then write the report.
+    Prints one line per scene and, last, the report's path."""
+    import sys
+
+    from ...addon.validation_runner import run_validation
+    from ...core.report_html import write_report
+    from ..interrupt import InterruptToCancel
+    from ..progress_bar import ProgressBar
+
+    bar = None if quiet else ProgressBar(label)
+    try:
+        with InterruptToCancel() as interrupt:
+            results = run_validation(jobs, settings, out, progress=interrupt.wrap(bar))
+            if bar is not None:
+                bar(1.0, "writing the report")
+            report = write_report(results, out)
+    finally:
+        if bar is not None:
+            bar.close()
+    for name, scene in results["scenes"].items():
+        for warning in scene["warnings"]:
+            print(f"xsl-render: warning: {name}: {warning}", file=sys.stderr)
+        print(scene_line(name, scene))
+    if not results["vdp"]["ran"]:
+        print(f"VDP skipped: {results['vdp']['skipped']}")
+    print(f"{results['rendered']} step(s) computed, {results['reused']} reused; "
+          f"results in {out / 'results.json'}")
+    print(f"report: {report.resolve()}")
+    return results
+
+
+def scene_line(name: str, scene: dict) -> str:
+    """'road: gold 12.3 s; xsl 2.1 s (5.86x, mean FLIP 0.0312); ...'"""
+    parts = []
+    for run_name, run in scene["runs"].items():
+        if run_name == "gold":
+            parts.append(f"gold {run['time_s']:.1f} s")
+            continue
+        flip = run["metrics"].get("flip", {}).get("mean_flip")
+        flip_text = f", mean FLIP {flip:.4f}" if flip is not None else ""
+        parts.append(f"{run_name} {run['time_s']:.1f} s ({run['speedup_over_gold']:.2f}x{flip_text})")
+    return f"{name}: " + "; ".join(parts)
+
+
+def run(args) -> int:
+    from ...addon.blend_session import check_blend_file
+    from ...addon.validation_runner import SceneJob
+    from ...core.example_scenes import resolve_scenes
+    from ...core.validation_plan import parse_list
+    from ...core.validation_store import check_output_folder
+
+    settings = settings_from_args(args)
+    minbound = parse_list(args.minbound_scenes, ())
+    jobs = [SceneJob(name, check_blend_file(path), compare_minbound=name in minbound)
+            for name, path in resolve_scenes(args.scenes)]
+    out = check_output_folder(args.out)
+    run_and_report(jobs, settings, out, NAME, args.quiet)
+    return 0
