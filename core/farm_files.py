@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .files import write_json
+from .files import file_sha256, json_digest, write_json
 from .imageio import read_image, write_exr
 from .render_options import RenderOptions
 from .tile_plan import Rect, TilePlan
@@ -40,20 +40,6 @@ RECORD_FORMAT = 1
 TILE_CHANNELS = ["R", "G", "B", "A", "samples"]
 #: With denoising, a rectangle also keeps Cycles' denoising albedo and normal for the composite.
 GUIDE_CHANNELS = ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z"]
-
-
-def json_digest(data) -> str:
-    """SHA-256 of ``data`` as canonical JSON (sorted keys, no spaces)."""
-    text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
-def file_sha256(path: str | os.PathLike) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def scene_sha256(path: str | os.PathLike) -> str:

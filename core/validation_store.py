@@ -18,31 +18,20 @@ the options, the hash of what it was compared with) equals the hash stored with 
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from pathlib import Path
 
 from .errors import InputError
-from .files import write_json
+from .files import file_sha256, json_digest, write_json
 
 #: Bumped when a change to the pipeline makes old renders or metrics incomparable.
 PIPELINE_VERSION = 1
 
 
-def file_sha256(path: str | os.PathLike) -> str:
-    """SHA-256 of a file's bytes (a .blend changes hash whenever it is saved differently)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def inputs_hash(inputs: dict) -> str:
     """A stable hash of JSON-ready inputs (keys sorted, floats as JSON writes them)."""
-    text = json.dumps({"pipeline": PIPELINE_VERSION, **inputs}, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return json_digest({"pipeline": PIPELINE_VERSION, **inputs})
 
 
 def read_record(path: str | os.PathLike, expected_hash: str, needs: tuple[Path, ...] = ()) -> dict | None:
