@@ -95,7 +95,9 @@ class JobOperator:
         return True
 
     def make_job(self, context, modal: bool) -> Job:
-        raise NotImplementedError
+        """The job this operator runs; every concrete operator defines it (bpy's operator
+        metaclass does not combine with abc's, hence no @abstractmethod)."""
+        raise NotImplementedError(f"{type(self).__name__} defines no job")
 
     # -- in one go ---------------------------------------------------------------------------
     def execute(self, context):
