@@ -127,11 +127,6 @@ def light_map(footprints, shape: tuple[int, int], parameters: dict[str, tuple[in
     return np.clip(total, 0.0, 1.0).astype(np.float32), report
 
 
-def kernel_mass(n: int) -> float:
-    """Integral of prod_{i=1..n} (delta + G_i): each factor has mass 2."""
-    return 2.0 ** n
-
-
 def multi_gaussian_direct(zero_light_map: np.ndarray, n: int, sigma_base: float,
                           scale: float = 1.0, margin: int | None = None) -> np.ndarray:
     """Eq. 6 iterated literally, with scipy's Gaussian filter on a zero-padded canvas.
@@ -153,18 +148,6 @@ def normalise(light_map: np.ndarray) -> np.ndarray:
     peak = float(np.max(light_map)) if light_map.size else 0.0
     if peak <= 0 or not np.isfinite(peak):
         return np.zeros_like(light_map, dtype=np.float32)
-    return np.clip(light_map / peak, 0.0, 1.0).astype(np.float32)
-
-
-def normalise_glow(light_map: np.ndarray, zero_light_map: np.ndarray) -> np.ndarray:
-    """The L map in [0, 1]: L_n divided by the peak of its glow (L_n - L_0), clipped.
-
-    Where there is no glow (n = 0) this is L_0 scaled by its maximum.
-    """
-    glow = np.asarray(light_map, dtype=np.float64) - np.asarray(zero_light_map, dtype=np.float64)
-    peak = float(glow.max()) if glow.size else 0.0
-    if not peak > 1e-12 * max(float(np.max(zero_light_map)) if glow.size else 0.0, 1e-300):
-        return normalise(zero_light_map)
     return np.clip(light_map / peak, 0.0, 1.0).astype(np.float32)
 
 

@@ -8,9 +8,9 @@ import pytest
 
 from xsl_render.core.camera import CameraModel
 from xsl_render.core.errors import InputError
-from xsl_render.core.light_map import (auto_parameters, eq6_components, multi_gaussian,
-                                       multi_gaussian_direct, normalise, normalise_glow)
-from xsl_render.core.light_raster import spot_weight, zero_light_map
+from xsl_render.core.light_map import (auto_parameters, eq6_components, glow_kernel, light_map,
+                                       multi_gaussian, multi_gaussian_direct, normalise)
+from xsl_render.core.light_raster import Footprint, spot_weight, zero_light_map
 from xsl_render.core.scale_space import gaussian_mixture_blur
 from xsl_render.core.scene_model import LightSource
 
@@ -93,15 +93,38 @@ def test_narrow_blurs_add_exactly_their_variance(sigma):
     assert out.sum() == pytest.approx(1.0) and variance_rows == pytest.approx(sigma ** 2, rel=1e-6)
 
 
+def point_lamp(name="lamp", row=72, col=128, mass=1.0, tau=0.5):
+    return Footprint(name, row, col, np.full((1, 1), mass), tau)
+
+
 def test_glow_grows_with_n_and_sigma_base():
-    image = np.zeros((144, 256))
-    image[70:74, 126:130] = 1.0
     def glow_area(n, sigma_base):
-        return int((normalise_glow(multi_gaussian(image, n, sigma_base), image) > 0.1).sum())
+        l_map, _ = light_map([point_lamp()], (144, 256), {"lamp": (n, sigma_base)})
+        return int((l_map > 0.1).sum())
     areas_n = [glow_area(n, 4.0) for n in (2, 4, 8, 12)]
     areas_sigma = [glow_area(8, s) for s in (1.0, 2.0, 4.0, 8.0)]
     assert areas_n == sorted(areas_n) and areas_n[0] < areas_n[-1]
     assert areas_sigma == sorted(areas_sigma) and areas_sigma[0] < areas_sigma[-1]
+
+
+def test_each_light_glows_at_its_perceived_brightness():
+    """Cube root of the share of light: a lamp with 1/8 of the brightest's glows at 1/2."""
+    lamps = [point_lamp("bright", 40, 60, 8.0), point_lamp("dim", 40, 200, 1.0)]
+    l_map, report = light_map(lamps, (80, 256), {"bright": (8, 4.0), "dim": (8, 4.0)})
+    assert [r["brightness"] for r in report] == pytest.approx([1.0, 0.5])
+    # The cores clip at 1; around them each glow is scaled to its lamp's brightness.
+    assert l_map[40, 60] == l_map[40, 200] == 1.0
+    for offset in (1, 5, 10):
+        assert l_map[40, 200 + offset] / l_map[40, 60 + offset] == pytest.approx(0.5, rel=0.02)
+    assert l_map[40, 65] > 0.5          # a point lamp keeps its glow: 5 px away, over half
+
+
+@pytest.mark.parametrize("n, sigma_base", [(3, 2.0), (8, 4.0), (12, 6.0)])
+def test_analytic_glow_peak_matches_the_spread_map(n, sigma_base):
+    image = single_pixel((121, 121))
+    spread = multi_gaussian(image, n, sigma_base, scale=1.0) - image
+    assert glow_kernel(np.array(0.0), n, sigma_base) == pytest.approx(spread[60, 60], rel=0.02)
+    assert glow_kernel(np.array(10.0), n, sigma_base) == pytest.approx(spread[60, 70], rel=0.02)
 
 
 def test_sigmas_scale_with_resolution():
@@ -229,13 +252,3 @@ def test_a_lamp_weighs_its_irradiance_whatever_its_size(size):
     l0, report = zero_light_map(cam, [lamp(size=size)], np.full((36, 64), np.inf), no_fog)
     assert l0.sum() == pytest.approx(1000 / (4 * math.pi) / 100, rel=1e-5)
     assert report[0].irradiance == pytest.approx(1000 / (4 * math.pi) / 100)
-
-
-def test_glow_normalisation_keeps_a_point_lamps_glow():
-    image = np.zeros((72, 128))
-    image[36, 64] = 50.0                       # all of a lamp's light in one pixel
-    plain = normalise(multi_gaussian(image, 8, 4.0))
-    glow = normalise_glow(multi_gaussian(image, 8, 4.0), image)
-    assert glow[36, 64] == 1.0 and glow.max() == 1.0
-    assert glow[36, 69] > 0.5 and glow[36, 69] > 2 * plain[36, 69]   # 5 px away
-    assert not normalise_glow(np.zeros((4, 4)), np.zeros((4, 4))).any()
