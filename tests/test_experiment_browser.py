@@ -20,9 +20,9 @@ from test_experiment_server import make_stimuli
 from xsl_render.core.experiment_store import read_answers
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.browser, pytest.mark.skipif(
     CHROMIUM is None, reason="no chromium on this machine (apt-get install chromium; "
-                             "python3 run.py test installs it when it can)")
+                             "python3 run.py test installs it when it can)")]
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                  "--disable-component-update", "--no-first-run"]
 TOLERANCE_MS = 100.0
