@@ -35,6 +35,18 @@ def test_multiply_is_saliency_modulated_by_extinction():
     np.testing.assert_allclose(xs_map(X, S, 1.0, 1.0, "multiply"), X * S, rtol=1e-6)
 
 
+@pytest.mark.parametrize("weights", [(0.5, 0.5), (0.8, 0.2), (1.0, 1.0)])
+def test_no_saliency_is_the_floor_of_the_add_operator(weights):
+    # bench/bench_bounds.py rests on this: with "add", XS is never below the XS of S = 0, so
+    # the samples the map asks for with S = 0 bound the speedup any saliency map can give.
+    none = xs_map(X, np.zeros_like(S), *weights)
+    for saliency in (S, S * 0.01, np.ones_like(S)):
+        assert (xs_map(X, saliency, *weights) >= none).all()
+        assert (xsl_map(xs_map(X, saliency, *weights), L) >= xsl_map(none, L)).all()
+    # and the floor is the weighted X itself: thin fog alone keeps the map high
+    np.testing.assert_allclose(none, X * weights[0] / max(1.0, sum(weights)), rtol=1e-6)
+
+
 def test_maps_already_in_unit_range_are_not_stretched():
     thin_fog = np.full((4, 4), 0.8, np.float32)
     assert np.array_equal(to_unit_range(thin_fog), thin_fog)
