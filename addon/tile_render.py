@@ -201,7 +201,7 @@ class CyclesWindowRenderer:
         files = sorted(self.folder.glob("window*.exr"))
         if not files:
             raise RuntimeError("Cycles wrote no image")
-        channels, attributes = read_exr_parts(files[0])
+        channels, attributes = read_exr_parts(files[0], small=window is not None)
         wanted = ("Combined",) + (("Debug Sample Count",) if counted else ()) \
             + (("Denoising Albedo", "Denoising Normal") if self.guides else ())
         passes = passes_from_channels(channels, self.layer.name, wanted)
