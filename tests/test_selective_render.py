@@ -188,3 +188,19 @@ def test_adaptive_sampling_inside_rectangles(fog):
         planned[tile["row0"]:tile["row1"], tile["col0"]:tile["col1"]] = tile["spp"]
     assert (outcome.samples <= planned).all() and (outcome.samples >= 1).all()
     assert (outcome.samples < planned).any()
+
+
+def test_a_new_noise_threshold_reaches_cycles_without_a_resync(fog):
+    # The threshold changes between rectangles without tagging the scene (a re-sync costs
+    # seconds on heterogeneous volumes): Cycles must still render with the new one.
+    from xsl_render.addon.scene_state import preserved_scene
+    from xsl_render.addon.tile_render import CyclesWindowRenderer
+
+    window = (0, 16, 0, 16)
+    with preserved_scene(fog), CyclesWindowRenderer(fog, 0) as renderer:
+        loose = renderer.render(window, 128, adaptive_threshold=0.5)
+        strict = renderer.render(window, 128, adaptive_threshold=0.002)
+        loose_again = renderer.render(window, 128, adaptive_threshold=0.5)
+    assert np.mean(strict.samples) > 1.5 * np.mean(loose.samples)
+    np.testing.assert_array_equal(loose_again.samples, loose.samples)
+
