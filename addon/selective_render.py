@@ -219,8 +219,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
             time_limit = 0.0
             if time_budget is not None:
                 # Sync the scene (persistent data) inside the budget, then give Cycles the rest.
+                # The warm-up has the real render's passes and sampling mode: any difference
+                # would make Cycles sync the scene again (seconds with heterogeneous volumes).
                 row, col = (height - min(height, _WARMUP_SIZE)) // 2, (width - min(width, _WARMUP_SIZE)) // 2
-                renderer.render((row, row + min(height, _WARMUP_SIZE), col, col + min(width, _WARMUP_SIZE)), 1)
+                renderer.render((row, row + min(height, _WARMUP_SIZE), col, col + min(width, _WARMUP_SIZE)), 1,
+                                adaptive_threshold=adaptive_threshold, time_limit=time_budget)
                 time_limit = max(0.01, time_budget - (time.perf_counter() - started))
                 began = time.perf_counter()
 

@@ -18,8 +18,10 @@ heterogeneous volumes' octree). The count therefore goes through the view layer'
 override (``cycles.use_layer_samples = "USE"``, ``view_layer.samples``), which Cycles reads at
 every render without a re-sync (0.03 s). Other settings (adaptive sampling, time limit) still
 tag the scene when they change (once per run), except the adaptive noise threshold, which
-Cycles reads at every render too and which changes from one rectangle to the next; the count
-Cycles reports in the EXR header is checked against the one asked for.
+Cycles reads at every render too and which changes from one rectangle to the next, and the
+time limit when the sample count changes with it (a new count resets Cycles' session, which
+reads the limit again); the count Cycles reports in the EXR header is checked against the
+one asked for.
 """
 from __future__ import annotations
 
@@ -162,10 +164,13 @@ class CyclesWindowRenderer:
         counted = adaptive_threshold is not None or time_limit > 0.0
         multilayer = counted or self.guides
         self._assign(cycles, "samples", samples)
-        self._assign(self.layer, "samples", samples)     # read at every render, no re-sync needed
+        new_count = self._assign(self.layer, "samples", samples)   # read at every render, no re-sync
+        new_limit = self._assign(cycles, "time_limit", time_limit)
         changed = [self._assign(cycles, "use_adaptive_sampling", adaptive_threshold is not None),
-                   self._assign(cycles, "time_limit", time_limit),
-                   self._assign(self.layer.cycles, "pass_debug_sample_count", counted)]
+                   self._assign(self.layer.cycles, "pass_debug_sample_count", counted),
+                   # A new sample count resets Cycles' session, which re-reads the time limit;
+                   # only a new limit at the same count needs the (costly) re-sync.
+                   new_limit and not new_count]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).

@@ -204,3 +204,23 @@ def test_a_new_noise_threshold_reaches_cycles_without_a_resync(fog):
     assert np.mean(strict.samples) > 1.5 * np.mean(loose.samples)
     np.testing.assert_array_equal(loose_again.samples, loose.samples)
 
+
+
+@pytest.mark.parametrize("mode", ["uniform", "adaptive"])
+def test_equal_time_baselines_sync_a_volume_scene_once(blender, mode):
+    # balls_b's noise fog costs Cycles seconds of sync at any size (Blender 5 builds the
+    # volume's octree). The warm-up pays it inside the budget; if the timed render differed
+    # in passes, sampling mode or limit handling, Cycles would sync again past the budget.
+    from xsl_render.addon.blend_session import open_blend
+    from conftest import EXAMPLES
+
+    scene = open_blend(EXAMPLES / "balls_b.blend")
+    options = RenderOptions(max_spp=4096, resolution=(64, 48), denoise=False)
+    budget = 5.0
+    if mode == "uniform":
+        outcome = sr.render_uniform(scene, options, seconds=budget)
+    else:
+        outcome = sr.render_adaptive(scene, options, budget)
+    sync = outcome.stats["time_budget_s"] - outcome.stats["time_limit_s"]
+    assert sync > 1.0, "the scene was expected to cost more than a second to sync"
+    assert outcome.stats["phases_s"]["renders"] < outcome.stats["time_budget_s"] + 0.5 * sync
