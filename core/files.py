@@ -111,14 +111,6 @@ def write_json(path: str | os.PathLike, data) -> Path:
     return write_text(path, json.dumps(data, indent=2) + "\n")
 
 
-def check_output_path(path: str | os.PathLike, suffix: str) -> Path:
-    """``core.checks.writable_file`` (kept for the commands until they check their options
-    while parsing)."""
-    from .checks import writable_file
-
-    return writable_file(path, (suffix,))
-
-
 def file_sha256(path: str | os.PathLike) -> str:
     """SHA-256 of a file's bytes, read in 1 MiB blocks."""
     digest = hashlib.sha256()

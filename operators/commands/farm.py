@@ -13,7 +13,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from ...core.errors import InputError
+from . import argtypes
 from .common import (add_map_arguments, add_tile_arguments, map_options_from_args,
                      parse_resolution)
 
@@ -23,13 +23,15 @@ DEFAULT_TASKS_PER_FRAME = 4
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
-    parser.add_argument("--bundle", required=True, metavar="DIR", help="folder for the job bundle")
+    parser.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
+    parser.add_argument("--bundle", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="folder for the job bundle")
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
     parser.add_argument("--frames", metavar="START-END",
                         help="frames to render: 12, 1-250 or 1-250:2 (default: the scene's range)")
-    parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
-    parser.add_argument("--max-spp", type=int,
+    parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render resolution (default: the scene's)")
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES,
                         help="samples per pixel where the map is 1 (default: the scene's Cycles samples)")
     parser.add_argument("--mode", choices=("xs", "xsl"), default="xsl",
                         help="director map that plans the tiles (default xsl)")
@@ -84,8 +86,6 @@ def run(args) -> int:
     frames = parse_frames(args.frames) if args.frames is not None else None
     resolution = parse_resolution(args.resolution)
     check_groups(args.tasks_per_frame)
-    if args.max_spp is not None and args.max_spp < 1:
-        raise InputError(f"--max-spp must be at least 1 (got {args.max_spp})")
     tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
 

@@ -16,17 +16,21 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from . import argtypes
 from .common import (add_map_arguments, add_tile_arguments, map_options_from_args,
                      render_options_from_args, warnings_as_lines)
 
 NAME = "farm-task"
 HELP = "run one task of a farm job (maps, tiles or composite of a frame); used by job templates"
 MODES = ("xs", "xsl")
+#: Each task keeps what it finished, with what it was made from, so a rerun resumes.
+OUTPUTS_AS_A_SET = False
 
 
 def _frame_arguments(parser) -> None:
-    parser.add_argument("--frame", type=int, required=True, help="the frame")
-    parser.add_argument("--output", required=True, metavar="DIR", help="the job's output folder")
+    parser.add_argument("--frame", type=argtypes.FRAME, required=True, help="the frame")
+    parser.add_argument("--output", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="the job's output folder")
 
 
 def add_arguments(parser) -> None:
@@ -34,19 +38,21 @@ def add_arguments(parser) -> None:
     steps.required = True
 
     maps = steps.add_parser("maps", help="director maps and tile plan of a frame")
-    maps.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    maps.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
     maps.add_argument("--scene-name", required=True, help="which scene of the file")
     _frame_arguments(maps)
     maps.add_argument("--mode", required=True, choices=MODES, help="which director map plans the tiles")
-    maps.add_argument("--max-spp", type=int, required=True, help="samples per pixel where the map is 1")
-    maps.add_argument("--resolution", required=True, metavar="WxH", help="render resolution")
+    maps.add_argument("--max-spp", type=argtypes.SAMPLES, required=True,
+                      help="samples per pixel where the map is 1")
+    maps.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
+                      help="render resolution")
     add_map_arguments(maps)
     maps.add_argument("--minbound-value", choices=("true", "false"),
                       help="MinBound as a value (job templates), overrides --minbound/--no-minbound")
     add_tile_arguments(maps)
 
     tiles = steps.add_parser("tiles", help="render one task's share of a frame's rectangles")
-    tiles.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    tiles.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
     _frame_arguments(tiles)
     tiles.add_argument("--group", type=int, required=True, help="this task's number, 1..--groups")
     tiles.add_argument("--groups", type=int, required=True, help="tile tasks per frame")
