@@ -121,21 +121,3 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
         if args.verbose:
             print(f"xsl-render: Blender's console output is in {log_path}", file=sys.stderr)
     return code
-
-
-def entry() -> None:
-    code = main()
-    # Blender prints its own report at interpreter exit (e.g. "Error: Not freed memory
-    # blocks" after the denoiser's temporary images) straight to fd 1: after our last line,
-    # which commands promise is theirs (demo prints the report's path last). Our output is
-    # flushed; what Blender says from here on goes nowhere.
-    sys.stdout.flush()
-    sys.stderr.flush()
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    os.dup2(devnull, 2)
-    sys.exit(code)
-
-
-if __name__ == "__main__":
-    entry()

@@ -14,13 +14,14 @@ analyses it.
 """
 from __future__ import annotations
 
-import signal
 from pathlib import Path
 
 NAME = "experiment-serve"
 HELP = ("serve the 2AFC experiment of section 6.2 (no reference / reference) on the "
         "<scene>.gold.png + <scene>.test.png pairs of a folder; answers go to SQLite")
 
+#: Ctrl-C and SIGTERM stop the server cleanly (KeyboardInterrupt in its main thread).
+INTERRUPTIBLE = True
 #: The answers go to SQLite one by one as they come.
 OUTPUTS_AS_A_SET = False
 
@@ -64,18 +65,13 @@ def run(args) -> int:
     server = start_server(pairs, db_path, args.host, args.port, CONDITION_CHOICES[args.condition])
     server.say(f"{len(pairs)} scenes, condition {args.condition}; answers go to {db_path}")
     server.say(f"open {server.url} in the participant's browser (Ctrl-C stops)")
-    # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly.
-    previous = signal.signal(signal.SIGTERM, _stop)
+    # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly: the
+    # command line's signal watcher raises KeyboardInterrupt here (INTERRUPTIBLE).
     try:
         server.serve_forever()
     except KeyboardInterrupt:
         server.say("stopped; every answer given is in the database")
     finally:
-        signal.signal(signal.SIGTERM, previous)
         server.server_close()
         server.store.close()
     return 0
-
-
-def _stop(signum, frame):
-    raise KeyboardInterrupt
