@@ -60,7 +60,8 @@ def image_is_float(path: str | os.PathLike) -> bool:
     by convention scene-linear, where 8- and 16-bit integer files are display-referred."""
     image = oiio.ImageInput.open(str(path))
     if image is None:
-        raise InputError(f"cannot read image {path}")
+        reason = oiio.geterror().strip().splitlines()
+        raise InputError(f"cannot read image {path}: {reason[0] if reason else 'unknown format'}")
     try:
         return image.spec().format.basetype in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE)
     finally:
