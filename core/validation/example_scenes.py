@@ -9,7 +9,7 @@ from pathlib import Path
 from ..errors import InputError
 
 EXAMPLE_SCENES = ("balls_a", "balls_b", "statue", "road")
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*\Z")
 
 
 def example_folders() -> list[Path]:
