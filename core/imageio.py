@@ -87,8 +87,11 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: list[st
     """Write a float32 OpenEXR (ZIP compressed) atomically.
 
     A 2-D array becomes one channel named ``Y``. Refuses NaN and Inf: a map with them
-    is a bug upstream and must not reach a file.
+    is a bug upstream and must not reach a file; and a name without ``.exr``, under which
+    OpenImageIO would write another format.
     """
+    if Path(path).suffix.lower() != ".exr":
+        raise ValueError(f"write_exr writes OpenEXR files; {path} does not end in .exr")
     data = np.ascontiguousarray(_as_hwc(array), dtype=np.float32)
     if not np.isfinite(data).all():
         raise ValueError(f"refusing to write NaN or Inf to {path}")

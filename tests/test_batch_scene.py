@@ -1,5 +1,5 @@
 """The batch entry (``x.batch(...)`` inside ``blender -b``) leaves the open scene exactly as it
-found it (issue 15, point 9).
+found it (issue 15, point 9), and the panel's renders write EXR as the contract says (point 11).
 
 The dump walks every setting of the scene and of the structs inside it (render, image format
 and its colour spaces, Cycles, view layers, ...), three levels deep, so a setting no one
@@ -11,6 +11,9 @@ import shutil
 
 import pytest
 from conftest import EXAMPLES
+from fog_scene import build_fog_scene
+
+from xsl_render.core.imageio import read_image
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
@@ -105,3 +108,18 @@ def test_a_failing_batch_command_leaves_the_scene_too(addon, road, tmp_path, cap
     assert done.value.code == 2 and len(capfd.readouterr().err.strip().splitlines()) == 1
     assert differences(before, scene_dump(road)) == []
     assert list(tmp_path.glob("s*")) == []
+
+
+def test_render_gold_writes_exr_and_refuses_another_extension(blender, addon, tmp_path):
+    scene = build_fog_scene(blender, 32, 18, factory_reset=False)
+    scene.xsl_render.max_spp = 2
+    with pytest.raises(RuntimeError, match=r"must be a \.exr file"):
+        blender.ops.xsl.render_gold(filepath=str(tmp_path / "g.png"))
+    assert list(tmp_path.iterdir()) == []
+    assert blender.ops.xsl.render_gold(filepath=str(tmp_path / "g.exr")) == {"FINISHED"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.exr", "g_spp.exr", "g_spp.png"]
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageInput.open(str(tmp_path / "g.exr")).spec()
+    assert spec.format.basetype == oiio.FLOAT and spec.nchannels == 4
+    assert read_image(tmp_path / "g.exr").shape == (18, 32, 4)
