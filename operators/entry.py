@@ -29,9 +29,11 @@ def entry() -> None:
     temporaries.open_session()
     from .cli import main
 
-    code = main(watcher=watcher)
-    temporaries.seal()              # done: a Ctrl-C from here on changes nothing
-    temporaries.close_session()
+    try:
+        code = main(watcher=watcher)
+    finally:
+        temporaries.seal()          # done: a Ctrl-C from here on changes nothing
+        temporaries.close_session()
     # Blender prints its own report at interpreter exit (e.g. "Error: Not freed memory
     # blocks" after the denoiser's temporary images) straight to fd 1: after our last line,
     # which commands promise is theirs (demo prints the report's path last). Our output is
