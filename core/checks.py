@@ -39,16 +39,22 @@ def _say(name: str | None, text: str) -> str:
     return f"{name} {text}" if name else text
 
 
+def _from_text(value, parse, name: str | None, what: str):
+    """``value`` parsed when it is text; a bool is refused (Python counts it as a number)."""
+    if isinstance(value, bool):
+        raise InputError(_say(name, f"must be {what}, not {value}"))
+    if not isinstance(value, str):
+        return value
+    try:
+        return parse(value.strip())
+    except ValueError:
+        raise InputError(_say(name, f"must be {what}, not '{value}'")) from None
+
+
 def whole_number(value, lo: int = INT32_MIN, hi: int = INT32_MAX, name: str | None = None,
                  limit: str = "") -> int:
     """``value`` (an int, or text) as an int in [lo, hi]. ``limit`` says whose range it is."""
-    if isinstance(value, bool):
-        raise InputError(_say(name, f"must be a whole number, not {value}"))
-    if isinstance(value, str):
-        try:
-            value = int(value.strip())
-        except ValueError:
-            raise InputError(_say(name, f"must be a whole number, not '{value}'")) from None
+    value = _from_text(value, int, name, "a whole number")
     try:
         value = operator.index(value)       # int, numpy integers
     except TypeError:
@@ -63,13 +69,7 @@ def finite_number(value, lo: float | None = None, hi: float | None = None, *,
                   name: str | None = None) -> float:
     """``value`` (a number, or text) as a finite float; ``lo``/``hi`` bound it inclusively,
     ``above``/``below`` exclusively."""
-    if isinstance(value, bool):
-        raise InputError(_say(name, f"must be a number, not {value}"))
-    if isinstance(value, str):
-        try:
-            value = float(value.strip())
-        except ValueError:
-            raise InputError(_say(name, f"must be a number, not '{value}'")) from None
+    value = _from_text(value, float, name, "a number")
     try:
         value = float(value)
     except (TypeError, ValueError, OverflowError):
