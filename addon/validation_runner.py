@@ -12,14 +12,13 @@ import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
-from ..core.errors import Cancelled
 from ..core.files import write_json
 from ..core.imageio import write_exr, write_png
 from ..core.maps.director import xs_map, xsl_map
 from ..core.maps.files import read_map_set, write_map_set
 from ..core.maps.options import MapOptions
+from ..core.progress import ProgressCallback, WeightedSteps
 from ..core.sampling.render_options import RenderOptions
 from ..core.validation.compare import compare_with_gold
 from ..core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
@@ -28,7 +27,6 @@ from ..core.validation.results import scene_summary
 from ..core.validation.store import file_sha256, inputs_hash, read_record, write_record
 from ..core.validation.vdp import vdp_unavailable_reason
 
-Progress = Callable[[float, str], "bool | None"]
 #: Relative cost of each step, in gold renders, for the overall progress fraction.
 STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4,
                 "metrics": 0.1}
@@ -52,40 +50,6 @@ class SceneJob:
         return scene_variants(settings.variants, self.compare_minbound)
 
 
-class _Steps:
-    """Overall progress over steps of unequal weight; a True answer from the callback
-    (Ctrl-C) stops the run between steps and inside renders (``core.progress``)."""
-
-    def __init__(self, callback: Progress | None, weights: list[float]):
-        self.callback = callback
-        self.total = sum(weights) or 1.0
-        self.weights = weights
-        self.done = 0.0
-        self.index = 0
-
-    def sub(self, label: str, echo: str = "") -> Progress:
-        """A callback for the current step; ``echo`` is a prefix of the step's own messages
-        that the label already says (the render functions start theirs with the mode)."""
-        start, weight = self.done, self.weights[self.index]
-
-        def report(fraction: float, message: str):
-            if self.callback is None:
-                return False
-            if echo and message.startswith(echo):
-                message = message[len(echo):]
-            return self.callback((start + weight * min(1.0, max(0.0, fraction))) / self.total,
-                                 f"{label}: {message}")
-        return report
-
-    def begin(self, label: str) -> None:
-        if self.callback is not None and self.callback(self.done / self.total, label):
-            raise Cancelled("cancelled")
-
-    def finish(self) -> None:
-        self.done += self.weights[self.index]
-        self.index += 1
-
-
 def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[float]:
     """The steps' weights, in plan order; a render costs in proportion to its ceiling."""
     weights = []
@@ -99,7 +63,7 @@ def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[flo
 
 
 def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: str | Path,
-                   progress: Progress | None = None) -> dict:
+                   progress: ProgressCallback | None = None) -> dict:
     """Validate every scene in ``jobs`` into ``out_dir``; returns (and writes) results.json.
 
     The result holds, per scene, each variant's timing, samples and metrics, whether the
@@ -114,7 +78,7 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
     results = {"settings": settings.to_dict(),
                "vdp": {"ran": vdp_reason is None, "skipped": vdp_reason},
                "scenes": {}, "rendered": 0, "reused": 0}
-    steps = _Steps(progress, plan_weights(jobs, settings))
+    steps = WeightedSteps(progress, plan_weights(jobs, settings))
     for job in jobs:
         options = settings.render_options(job.max_spp)
         results["scenes"][job.name] = _SceneRun(job, settings, options, out_dir, steps, results).run()
@@ -124,7 +88,7 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
 
 class _SceneRun:
     def __init__(self, job: SceneJob, settings: ValidationSettings, options: RenderOptions,
-                 out_dir: Path, steps: _Steps, results: dict):
+                 out_dir: Path, steps: WeightedSteps, results: dict):
         self.job, self.settings, self.options = job, settings, options
         self.out_dir, self.steps, self.results = out_dir, steps, results
         self.folder = out_dir / job.name
@@ -147,10 +111,9 @@ class _SceneRun:
 
             self.scene = open_blend(self.job.path)
         if warm and not self.warm:
-            from .cycles.selective_render import render_uniform
+            from .validation.contestants import warm_up
 
-            # One tiny render first, so that no timed render pays Cycles' one-time start-up.
-            render_uniform(self.scene, RenderOptions(max_spp=1, resolution=(8, 8)), spp=1)
+            warm_up(self.scene)         # no timed render pays Cycles' one-time start-up
             self.warm = True
         return self.scene
 

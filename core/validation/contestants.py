@@ -85,7 +85,7 @@ def uniform_budgets(ceiling: int) -> list[int]:
 
 def _uniform(ceiling: int) -> list[Contestant]:
     return [Contestant(f"uniform_{spp}spp", "uniform", "uniform",
-                       f"uniform {spp} spp" + (" (gold standard)" if spp == ceiling else ""),
+                       f"uniform {spp} spp" + (" (gold)" if spp == ceiling else ""),
                        {"spp": spp}, gold=spp == ceiling)
             for spp in uniform_budgets(ceiling)]
 
@@ -93,13 +93,13 @@ def _uniform(ceiling: int) -> list[Contestant]:
 def _adaptive(ceiling: int) -> list[Contestant]:
     most = ADAPTIVE_CEILINGS * ceiling
     return [Contestant(f"adaptive_{threshold:g}", "adaptive", "adaptive",
-                       f"Cycles adaptive, threshold {threshold:g}, max {most} spp",
+                       f"adaptive {threshold:g}, max {most} spp",
                        {"noise_threshold": threshold, "max_spp": most})
             for threshold in ADAPTIVE_THRESHOLDS]
 
 
 def _guiding(ceiling: int) -> list[Contestant]:
-    return [Contestant(f"guiding_{spp}spp", "guiding", "guiding", f"Cycles path guiding {spp} spp",
+    return [Contestant(f"guiding_{spp}spp", "guiding", "guiding", f"path guiding {spp} spp",
                        {"spp": spp})
             for spp in uniform_budgets(ceiling)[-GUIDING_POINTS:]]
 
@@ -108,7 +108,7 @@ def _selective(director: str) -> Callable[[int], list[Contestant]]:
     def points(ceiling: int) -> list[Contestant]:
         ceilings = sorted({max(1, round(ceiling * f)) for f in SELECTIVE_FRACTIONS})
         return [Contestant(f"{director}_{spp}", director, director,
-                           f"{director.upper()}, ceiling {spp} spp (maps included)", {"max_spp": spp})
+                           f"{director.upper()}, ceiling {spp} spp", {"max_spp": spp})
                 for spp in ceilings]
     return points
 
