@@ -1,10 +1,12 @@
 """The objective validation of the paper (sections 5 and 6.1) on real scenes, resumable.
 
 For each scene: the director maps, the gold standard, the selective renders (X only, S only,
-XS, XSL, XSL without MinBound where asked), uniform and Cycles adaptive sampling at the wall
-time the XSL run took (maps included), and MSE, FLIP and VDP of each against the gold
-standard. Every finished step is kept on disk with the hash of its inputs
-(``core.validation.store``) and reused by the next run, so a run killed midway continues.
+XS, XSL, XSL without MinBound where asked), uniform sampling at fractions of the ceiling,
+uniform and Cycles adaptive sampling at the wall time the XSL run took (maps included); MSE,
+FLIP and VDP of each against the converged reference (``addon.validation.reference``: cached,
+or rendered once) and, the paper's measure, of each but gold against the gold standard.
+Every finished step is kept on disk with the hash of its inputs (``core.validation.store``)
+and reused by the next run, so a run killed midway continues.
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ from ..core.sampling.render_options import RenderOptions
 from ..core.validation.compare import compare_with_gold
 from ..core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
                                     map_seconds, scaled_size, scene_variants)
+from ..core.validation.reference import default_reference_spp, find_reference
 from ..core.validation.results import scene_summary
 from ..core.validation.store import file_sha256, inputs_hash, read_record, write_record
 from ..core.validation.vdp import vdp_unavailable_reason
@@ -51,14 +54,18 @@ class SceneJob:
 
 
 def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[float]:
-    """The steps' weights, in plan order; a render costs in proportion to its ceiling."""
+    """The steps' weights, in plan order; a render costs in proportion to its samples (the
+    reference's weight assumes it must be rendered; a cached one is reweighted)."""
     weights = []
     for job in jobs:
         variants = job.variants(settings)
-        ceiling = (job.max_spp or settings.max_spp) / settings.max_spp
+        spp = job.max_spp or settings.max_spp
+        ceiling = spp / settings.max_spp
         weights += [STEP_WEIGHTS["maps"]] * len({v.map_options.minbound for v in variants if v.map_options})
-        weights += [STEP_WEIGHTS[v.kind] * ceiling for v in variants]
+        weights += [(v.spp_fraction if v.spp_fraction else STEP_WEIGHTS[v.kind]) * ceiling for v in variants]
         weights += [STEP_WEIGHTS["metrics"]] * (len(variants) - 1)
+        weights.append((settings.reference_spp or default_reference_spp(spp)) / settings.max_spp)
+        weights += [STEP_WEIGHTS["metrics"]] * len(variants)
     return weights
 
 
@@ -129,9 +136,12 @@ class _SceneRun:
         for variant in variants:
             if variant.name != GOLD:
                 self.compare(variant)
+        reference = self.reference()
+        for variant in variants:
+            self.compare_with_reference(variant, reference)
         return scene_summary(self.job, self.sha256, self.size, self.options, variants, self.records,
                              {mb: info for mb, (_, _, info) in self.maps.items()}, self.warnings,
-                             self.reused)
+                             self.reused, reference.to_dict())
 
     def scene_size(self) -> tuple[int, int]:
         """The scene's own render size (opens the .blend, renders nothing)."""
@@ -215,6 +225,8 @@ class _SceneRun:
             director, _, seconds = self.director(variant)
             outcome = sr.render_selective(scene, director, options, progress=progress,
                                           mode=variant.name, map_seconds=seconds)
+        elif variant.kind == "uniform" and variant.spp_fraction is not None:
+            outcome = sr.render_uniform(scene, options, spp=variant.spp(options.max_spp), progress=progress)
         elif variant.kind == "uniform":
             outcome = sr.render_uniform(scene, options, seconds=inputs["budget_s"], progress=progress)
         else:
@@ -248,5 +260,42 @@ class _SceneRun:
                                            self.folder / "heatmaps" / variant.name, vdp=self.settings.vdp)
             comparison["heatmaps"] = {k: self.rel(Path(v)) for k, v in comparison["heatmaps"].items()}
             record.update(comparison=comparison, metrics_hash=digest)
+            write_record(self.folder / f"{variant.name}.json", record)
+        self.steps.finish()
+
+    # -- the converged reference ----------------------------------------------------------
+    def reference(self):
+        """The scene's converged reference at this size: cached (shipped with the repository,
+        or in the user cache) or rendered now and cached."""
+        from .validation.reference import ensure_reference, reference_inputs
+
+        scene = self.open_scene(warm=False)
+        inputs = reference_inputs(scene, self.job.path, spp=self.settings.reference_spp,
+                                  resolution=self.size, max_spp=self.options.max_spp,
+                                  blend_sha256=self.sha256)
+        if find_reference(inputs.key) is not None:
+            self.steps.reweight(STEP_WEIGHTS["metrics"])
+        label = f"{self.job.name}: converged reference ({inputs.spp} spp)"
+        self.steps.begin(label)
+        reference = ensure_reference(scene, inputs, progress=self.steps.sub(label, echo="uniform: "))
+        self.results["reused" if reference.source != "rendered" else "rendered"] += 1
+        self.steps.finish()
+        return reference
+
+    def compare_with_reference(self, variant: Variant, reference) -> None:
+        """MSE, FLIP and VDP of a run (gold included) against the converged reference."""
+        record = self.records[variant.name]
+        digest = inputs_hash({"step": "reference_metrics", "render": record["input_hash"],
+                              "reference": reference.inputs.key, "vdp": self.settings.vdp})
+        label = f"{self.job.name}: {variant.name} against the reference"
+        self.steps.begin(label)
+        heatmaps = record.get("reference_comparison", {}).get("heatmaps", {})
+        if record.get("reference_metrics_hash") != digest or not all(
+                (self.out_dir / p).is_file() for p in heatmaps.values()):
+            comparison = compare_with_gold(reference.path, self.out_dir / record["files"]["image"],
+                                           self.folder / "heatmaps" / f"{variant.name}_vs_reference",
+                                           vdp=self.settings.vdp)
+            comparison["heatmaps"] = {k: self.rel(Path(v)) for k, v in comparison["heatmaps"].items()}
+            record.update(reference_comparison=comparison, reference_metrics_hash=digest)
             write_record(self.folder / f"{variant.name}.json", record)
         self.steps.finish()
