@@ -75,7 +75,8 @@ def run(args) -> int:
     for warning in data["warnings"]:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     reference = data["reference"]
-    print(f"{data['scene']['scene']} at {data['scene']['size'][0]}x{data['scene']['size'][1]}, ceiling "
+    print(f"{Path(data['scene']['file']).name} (scene '{data['scene']['scene']}', frame "
+          f"{data['scene']['frame']}) at {data['scene']['size'][0]}x{data['scene']['size'][1]}, ceiling "
           f"{data['ceiling']} spp; reference {reference['inputs'].get('spp')} spp, seed "
           f"{reference['inputs'].get('seed')} ({reference['source']}); {data['repeats']} repeat(s)")
     print("\n".join(table_lines(data)))
