@@ -277,7 +277,8 @@ class _SceneRun:
             self.steps.reweight(STEP_WEIGHTS["metrics"])
         label = f"{self.job.name}: converged reference ({inputs.spp} spp)"
         self.steps.begin(label)
-        reference = ensure_reference(scene, inputs, progress=self.steps.sub(label, echo="uniform: "))
+        reference = ensure_reference(scene, inputs, progress=self.steps.sub(label, echo="uniform: "),
+                                     file_name=self.job.path.name)
         self.results["reused" if reference.source != "rendered" else "rendered"] += 1
         self.steps.finish()
         return reference

@@ -151,7 +151,8 @@ class CurvesJob:
         if find_reference(inputs.key) is not None:
             steps.reweight(0.01)
         steps.begin(f"reference ({inputs.spp} spp)")
-        reference = ensure_reference(self.scene, inputs, progress=steps.sub("reference", echo="uniform: "))
+        reference = ensure_reference(self.scene, inputs, progress=steps.sub("reference", echo="uniform: "),
+                                     file_name=self.blend_file.name)
         steps.finish()
         return read_image(reference.path), reference.to_dict()
 

@@ -84,7 +84,7 @@ class Reference:
 
 
 def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback | None = None,
-                     environ=None) -> Reference:
+                     environ=None, file_name: str | None = None) -> Reference:
     """The cached reference for ``inputs``, or render it now and cache it.
 
     ``scene`` must be the scene ``inputs`` were made from (``reference_inputs``); it is left
@@ -95,7 +95,7 @@ def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback 
         return _from_cache(found, inputs)
     folder = check_output_folder(user_folder(environ), "the reference cache")
     image, stats = render_reference(scene, inputs, progress)
-    entry = write_reference(folder, inputs, image, stats)
+    entry = write_reference(folder, inputs, image, stats, file_name=file_name)
     return Reference(entry.path, inputs, "rendered", stats)
 
 

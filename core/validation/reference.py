@@ -151,12 +151,13 @@ def find_reference(key: str, environ=None) -> CachedReference | None:
 
 
 def write_reference(folder: str | os.PathLike, inputs: ReferenceInputs, image: np.ndarray,
-                    stats: dict) -> CachedReference:
-    """Write the entry for ``inputs`` into ``folder``: the EXR first, the record last."""
+                    stats: dict, file_name: str | None = None) -> CachedReference:
+    """Write the entry for ``inputs`` into ``folder``: the EXR first, the record last.
+    ``file_name`` (the .blend's name) is kept in the record for people, not in the key."""
     exr, record_path = entry_paths(folder, inputs.key)
     write_exr(exr, image, attributes={SEED_ATTRIBUTE: inputs.seed, SPP_ATTRIBUTE: inputs.spp,
                                       KEY_ATTRIBUTE: inputs.key})
-    record = {"input_hash": inputs.key, "inputs": inputs.to_dict(), "stats": stats}
+    record = {"input_hash": inputs.key, "file": file_name, "inputs": inputs.to_dict(), "stats": stats}
     write_record(record_path, record)
     return CachedReference(exr, record, "cache")
 

@@ -72,7 +72,7 @@ def run(args) -> int:
     bar = None if args.quiet else ProgressBar(NAME)
     try:
         with InterruptToCancel() as interrupt:
-            reference = ensure_reference(scene, inputs, progress=interrupt.wrap(bar))
+            reference = ensure_reference(scene, inputs, progress=interrupt.wrap(bar), file_name=path.name)
     finally:
         if bar is not None:
             bar.close()
