@@ -9,7 +9,7 @@ import statistics
 import numpy as np
 import pytest
 from conftest import xsl_render_cli
-from fog_scene import build_fog_scene
+from fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
 from xsl_render.core.errors import InputError
@@ -62,12 +62,7 @@ def test_unknown_curves(text, message):
 # -- end to end --------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def fog_blend(tmp_path_factory):
-    import bpy
-
-    path = tmp_path_factory.mktemp("scene") / "fog.blend"
-    build_fog_scene(bpy, W, H)
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
+    return saved_fog_scene(tmp_path_factory.mktemp("scene"), W, H)
 
 
 @pytest.fixture(scope="module")

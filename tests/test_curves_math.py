@@ -129,3 +129,44 @@ def test_speedups_against_every_baseline_but_its_own():
     assert table["adaptive"]["flip"]["extrapolated"] is False
     own = speedups_against({"uniform": uniform, "adaptive": adaptive}, run, own_curve="uniform")
     assert set(own) == {"adaptive"}
+
+
+# -- curves.json, its table, plot and report from synthetic runs (no Blender) -----------
+def synthetic_curves(jod: bool):
+    from xsl_render.core.validation.contestants import CURVES, plan_contestants
+    from xsl_render.core.validation.curves_results import build_curves, summarise_run
+
+    runs = {}
+    for contestant in plan_contestants(8, ("uniform", "adaptive", "xsl")):
+        spp = contestant.params.get("spp") or contestant.params["max_spp"] / 2
+        seconds = 0.5 + spp / 4 if contestant.curve != "xsl" else 1.0 + spp / 8
+        flip = 0.1 * (spp / 8) ** -0.25
+        repeats = [{"seed": seed, "seconds": seconds * (1 + 0.1 * seed), "mean_spp": spp, "flip": flip,
+                    "mse": flip ** 2, "jod": (10 - flip * 5) if jod else None, "file": f"{contestant.name}.exr",
+                    "reused": False, "stats": {}} for seed in (0, 1)]
+        runs[contestant.name] = summarise_run(contestant, repeats)
+    header = {"scene": {"file": "x/fog.blend", "sha256": "0", "scene": "Scene", "frame": 1, "size": [48, 27]},
+              "ceiling": 8, "reference": {"source": "cache", "inputs": {"spp": 128, "seed": 7}},
+              "repeats": 2, "seeds": [0, 1], "vdp": {"ran": jod, "skipped": None if jod else "not installed"},
+              "warnings": []}
+    return build_curves(header, CURVES, runs)
+
+
+@pytest.mark.parametrize("jod", [False, True])
+def test_curves_json_table_plot_and_report(jod, tmp_path):
+    from xsl_render.core.validation.curves_plot import write_curves_png
+    from xsl_render.core.validation.curves_report import write_curves_report
+    from xsl_render.core.validation.curves_results import table_lines
+
+    data = synthetic_curves(jod)
+    assert list(data["curves"]) == ["uniform", "adaptive", "xsl"]
+    assert data["runs"]["uniform_4spp"]["seconds"] == pytest.approx(1.5 * 1.05)    # median of 1.5, 1.65
+    assert set(data["runs"]["xsl_4"]["speedups"]) == {"uniform", "adaptive"}
+    assert set(data["runs"]["uniform_4spp"]["speedups"]) == {"adaptive"}
+    assert (data["runs"]["xsl_4"]["speedups"]["uniform"]["jod"]["value"] is not None) is jod
+    lines = table_lines(data)
+    assert ("JOD" in lines[1]) is jod and "speedup vs uniform" in lines[0]
+    assert len(lines) == 2 + len(data["runs"]) + 1
+    png = write_curves_png(data, tmp_path / "curves.png")
+    report = write_curves_report(data, tmp_path, png).read_text()
+    assert report.count("<tr") == 2 + len(data["runs"]) and (">JOD<" in report) is jod

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES, xsl_render_cli
-from fog_scene import build_fog_scene
+from fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
@@ -28,12 +28,7 @@ TINY = ("--max-spp", "4", "--tile-size", "16", "--no-vdp", "--quiet") + REFERENC
 
 @pytest.fixture(scope="module")
 def fog_blend(tmp_path_factory):
-    import bpy
-
-    path = tmp_path_factory.mktemp("scene") / "fog.blend"
-    build_fog_scene(bpy, W, H)
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
+    return saved_fog_scene(tmp_path_factory.mktemp("scene"), W, H)
 
 
 @pytest.fixture(scope="module")
