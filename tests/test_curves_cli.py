@@ -163,6 +163,7 @@ def test_a_given_reference_is_checked(fog_blend, tmp_path, curves):
     (("--curves", "bogus"), "unknown curve 'bogus'"),
     (("--reference", "missing.exr"), "no such reference file"),
 ])
+@pytest.mark.blender          # the command line, as a user runs it
 def test_bad_values_exit_2_with_one_line(extra, message, tmp_path):
     from conftest import EXAMPLES
 

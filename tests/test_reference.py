@@ -226,6 +226,7 @@ def test_ctrl_c_twice_stops_the_render_and_writes_nothing(fog_blend, tmp_path):
     (("--max-spp", "0"), "--max-spp must be at least 1"),
     (("--out", "r.png"), "must be a .exr file"),
 ])
+@pytest.mark.blender          # the command line, as a user runs it
 def test_bad_values_exit_2_with_one_line(extra, message, tmp_path):
     args = ["reference", EXAMPLES / "road.blend", "--out", tmp_path / "r.exr"]
     if extra[0] == "--out":
