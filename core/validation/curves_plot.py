@@ -48,9 +48,10 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
                                   xytext=(6, 6), fontsize=8)
         axis.set_xscale("log")
         axis.set_yscale("log")
-        for scale, scientific in ((axis.xaxis, False), (axis.yaxis, metric == "mse")):
-            scale.set_major_formatter(FuncFormatter(_tick_label(scientific)))
-            scale.set_minor_formatter(FuncFormatter(_tick_label(scientific)))
+        for scale, scientific, digits in ((axis.xaxis, False, (1, 2, 3, 5)),
+                                          (axis.yaxis, metric == "mse", (1, 2, 3, 4, 5, 6, 8))):
+            scale.set_major_formatter(FuncFormatter(_tick_label(scientific, digits)))
+            scale.set_minor_formatter(FuncFormatter(_tick_label(scientific, digits)))
         axis.set_xlabel("wall time per frame, s (maps, sync, render, denoise)")
         axis.set_ylabel(title)
         axis.grid(True, which="both", alpha=0.25)
@@ -70,14 +71,15 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
     return path
 
 
-def _tick_label(scientific: bool):
-    """Log-axis tick labels as plain numbers (0.2, 3, 40; 2e-05 for MSE) at 1, 2 and 5 of
-    each decade only, so that a narrow range still has labels and a wide one is not crowded."""
+def _tick_label(scientific: bool, digits: tuple[int, ...]):
+    """Log-axis tick labels as plain numbers (0.2, 3, 40; 2e-5 for MSE) at the ticks whose
+    leading digit is in ``digits`` only, so that a narrow range (errors often span less than a
+    decade) still has labels and a wide one (seconds) is not crowded."""
     def label(value: float, _position) -> str:
         if value <= 0:
             return ""
         leading = int(round(value / 10 ** math.floor(math.log10(value) + 1e-9)))
-        if leading not in (1, 2, 5):
+        if leading not in digits:
             return ""
         return f"{value:.0e}".replace("e-0", "e-").replace("e+0", "e") if scientific else f"{value:g}"
     return label

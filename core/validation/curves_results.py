@@ -91,7 +91,7 @@ def table_lines(data: dict) -> list[str]:
     head = f"{'run':<34} {'time s':>7} {'spp':>7} {'FLIP':>7} {'MSE':>9}" + (f" {'JOD':>6}" if "jod" in metrics else "")
     for baseline in baselines:
         width = 2 + 9 * len(metrics) - 1
-        group += f"{'speedup vs ' + baseline:>{width}}"
+        group += f"  {'speedup vs ' + baseline:^{width - 2}}"
         head += "  " + " ".join(f"{m.upper():>8}" for m in metrics)
     lines = [group, head]
     for curve in data["curves"].values():
