@@ -38,7 +38,7 @@ from ...core.validation.curves_results import (STATS_KEPT, build_curves, metric_
 from ...core.validation.image_pair import check_pair
 from ...core.validation.metrics import compare_images
 from ...core.validation.reference import (REFERENCE_SEED, check_contestant_seeds,
-                                          default_reference_spp, read_reference)
+                                          default_reference_spp, find_reference, read_reference)
 from ...core.validation.store import inputs_hash, read_record, write_record
 from ...core.validation.vdp import vdp_unavailable_reason
 from ..cycles.denoise import DENOISE_VERSION
@@ -146,8 +146,6 @@ class CurvesJob:
                                   resolution=self.size, frame=self.scene.frame_current,
                                   max_spp=self.ceiling, blend_sha256=self.sha256)
         check_contestant_seeds(self.settings.seeds, inputs.seed)
-        from ...core.validation.reference import find_reference
-
         if find_reference(inputs.key) is not None:
             steps.reweight(0.01)
         steps.begin(f"reference ({inputs.spp} spp)")
