@@ -55,6 +55,17 @@ def image_channel_names(path: str | os.PathLike) -> list[str]:
         image.close()
 
 
+def image_attributes(path: str | os.PathLike) -> dict[str, object]:
+    """The header attributes of an image file (e.g. ``xsl_render:seed`` of a reference)."""
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        raise InputError(f"cannot read image {path}")
+    try:
+        return {attr.name: attr.value for attr in image.spec().extra_attribs}
+    finally:
+        image.close()
+
+
 def image_is_float(path: str | os.PathLike) -> bool:
     """True when the file stores floating-point pixels (OpenEXR, float TIFF, Radiance HDR):
     by convention scene-linear, where 8- and 16-bit integer files are display-referred."""

@@ -271,11 +271,13 @@ def render_uniform(scene, options: RenderOptions, spp: int | None = None, second
                           extra={"budget": "time"})
 
 
-def render_adaptive(scene, options: RenderOptions, seconds: float,
+def render_adaptive(scene, options: RenderOptions, seconds: float | None,
                     noise_threshold: float = CYCLES_DEFAULT_NOISE_THRESHOLD,
                     progress: ProgressCallback | None = None) -> RenderOutcome:
     """Cycles' adaptive sampling with ``max_spp`` as the ceiling, stopped at ``seconds`` of wall
     time by Cycles' time limit (it may finish sooner if every pixel reaches the threshold).
+    ``seconds`` None: no time limit, Cycles stops where every pixel reaches the threshold
+    or at the ceiling (a point of the adaptive time-quality curve, ``xsl-render curves``).
 
     Why the time limit and not a tuned threshold: the threshold that makes Cycles finish in
     exactly ``seconds`` can only be found by trial renders, which cost more than the budget;
@@ -284,10 +286,11 @@ def render_adaptive(scene, options: RenderOptions, seconds: float,
     is paid inside the budget. The threshold is Cycles' default unless given: what an artist
     who switches on adaptive sampling and a time limit gets.
     """
-    if not seconds > 0:
+    if seconds is not None and not seconds > 0:
         raise InputError(f"the time budget must be positive (got {seconds})")
     if not noise_threshold > 0:
         raise InputError(f"--noise-threshold must be positive (got {noise_threshold})")
     return _single_render(scene, options, "adaptive", progress, options.max_spp, time_budget=seconds,
                           adaptive_threshold=noise_threshold,
-                          extra={"budget": "time", "noise_threshold": noise_threshold})
+                          extra={"budget": "samples" if seconds is None else "time",
+                                 "noise_threshold": noise_threshold})

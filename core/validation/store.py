@@ -53,11 +53,12 @@ def write_record(path: str | os.PathLike, record: dict) -> Path:
     return write_json(path, record)
 
 
-def check_output_folder(folder: str | os.PathLike) -> Path:
-    """InputError (one line) unless ``folder`` is, or can become, a writable folder."""
+def check_output_folder(folder: str | os.PathLike, label: str = "--out") -> Path:
+    """InputError (one line) unless ``folder`` is, or can become, a writable folder
+    (``label`` names it in the message)."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
-        raise InputError(f"--out {folder} is a file, not a folder")
+        raise InputError(f"{label} {folder} is a file, not a folder")
     existing = folder.absolute()
     while not existing.exists():
         existing = existing.parent
