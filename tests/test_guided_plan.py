@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from xsl_render.core.errors import InputError
-from xsl_render.core.sampling.guided_plan import (SCORE_FLOOR, UNBOUNDED_SPP, BudgetPacer, GuidedOptions,
+from xsl_render.core.sampling.guided_plan import (FINAL_PASS_PIECES, SCORE_FLOOR, UNBOUNDED_SPP,
+                                                  BudgetPacer, GuidedOptions,
                                                   allocate, error_scores, plan_final_pass,
                                                   round_to_levels, tile_means)
 from xsl_render.core.sampling.pass_merge import PassAccumulator
@@ -69,36 +70,74 @@ def test_half_resolution_scores_map_onto_full_resolution_tiles():
     assert means[windows.index((0, 16, 32, 48))] == 1.0 and means[windows.index((16, 32, 0, 16))] == 0.0
 
 
-def test_final_pass_continues_the_pilot_where_the_error_is():
+def _spp_map(final, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Samples per pixel of a final pass, and how many of its rectangles cover each pixel."""
+    spp, covered = np.zeros((height, width), int), np.zeros((height, width), int)
+    for rect in final.rects:
+        spp[rect.row0:rect.row1, rect.col0:rect.col1] = rect.spp
+        covered[rect.row0:rect.row1, rect.col0:rect.col1] += 1
+    return spp, covered
+
+
+def test_final_pass_spends_its_samples_where_the_error_is():
     width, height, tile = 96, 64, 32
     windows = tile_windows(width, height, tile)
     scores = np.ones(len(windows))
     scores[0] = 50.0                                     # one tile with much more error
     options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=tile, level_ratio=1.5)
-    final = plan_final_pass(scores, None, width, height, options, have=4, extra_samples=20 * width * height)
-    assert final.first_sample == 4
-    spp = {rect.window: rect.spp for rect in final.rects}
-    assert max(spp, key=spp.get) == windows[0]
-    covered = np.zeros((height, width), int)
-    for rect in final.rects:
-        covered[rect.row0:rect.row1, rect.col0:rect.col1] += 1
-    assert covered.max() == 1                            # no pixel twice
+    final = plan_final_pass(scores, None, width, height, options, pixel_samples=20 * width * height)
+    spp, covered = _spp_map(final, width, height)
+    assert covered.min() == covered.max() == 1           # every pixel once
+    row0, row1, col0, col1 = windows[0]
+    assert spp[row0:row1, col0:col1].min() > np.delete(spp, np.s_[col0:col1], axis=1).max()
     assert abs(final.samples - 20 * width * height) < 0.3 * 20 * width * height   # levels round
 
 
 def test_exponent_zero_is_uniform():
     options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
     scores = np.random.default_rng(0).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
-    final = plan_final_pass(scores, None, 64, 48, options, have=2, extra_samples=6 * 64 * 48)
-    assert len(final.rects) == 1 and final.rects[0].window == (0, 48, 0, 64) and final.rects[0].spp == 6
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=6 * 64 * 48)
+    assert {rect.spp for rect in final.rects} == {6}
+    assert [(rect.col0, rect.col1) for rect in final.rects] == [(0, 64)] * len(final.rects)   # full rows
 
 
 def test_importance_weighs_the_scores():
     windows = tile_windows(64, 32, 32)
     options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=32, level_ratio=1.1)
-    final = plan_final_pass(np.ones(2), np.array([1.0, 3.0]), 64, 32, options, have=1, extra_samples=8 * 64 * 32)
-    spp = {rect.window: rect.spp for rect in final.rects}
-    assert spp[windows[1]] > 2 * spp[windows[0]]
+    final = plan_final_pass(np.ones(2), np.array([1.0, 3.0]), 64, 32, options, pixel_samples=8 * 64 * 32)
+    spp, _ = _spp_map(final, 64, 32)
+    assert spp[:, 32:].min() > 2 * spp[:, :32].max()
+
+
+@pytest.mark.parametrize("pixel_samples", [0.0, 10.0, 64 * 48 * 0.5])
+def test_every_pixel_gets_a_sample_however_small_the_budget(pixel_samples):
+    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16)
+    scores = np.random.default_rng(1).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=pixel_samples)
+    covered = np.zeros((48, 64), int)
+    for rect in final.rects:
+        assert rect.spp >= 1
+        covered[rect.row0:rect.row1, rect.col0:rect.col1] += 1
+    assert covered.min() == covered.max() == 1
+
+
+def test_final_pass_comes_in_pieces_the_pacer_can_correct():
+    options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
+    final = plan_final_pass(np.ones(len(tile_windows(96, 54, 16))), None, 96, 54, options,
+                            pixel_samples=32 * 96 * 54)
+    assert len(final.rects) >= FINAL_PASS_PIECES
+    assert max(rect.samples for rect in final.rects) <= final.samples / FINAL_PASS_PIECES + 96 * 32
+    covered = np.zeros((54, 96), int)
+    for rect in final.rects:
+        covered[rect.row0:rect.row1, rect.col0:rect.col1] += 1
+    assert covered.min() == covered.max() == 1
+
+
+def test_final_pass_obeys_the_ceiling():
+    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16, max_spp=5)
+    scores = np.random.default_rng(2).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=1e9)
+    assert {rect.spp for rect in final.rects} == {5}
 
 
 def test_pacer_rescales_the_renders_still_to_come():

@@ -4,15 +4,14 @@
 1. Importance, when asked for: the X, XS or XSL director map, computed by the caller
    (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
 2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else.
-3. Pilot: the whole frame for a share of the budget, Cycles' own time limit deciding how many
-   samples fit (the count is read back from Cycles).
-4. Scores: the pilot denoised at half resolution (a quarter of the denoiser's time), its
-   display luminance's gradient per tile (``core/sampling/guided_plan``).
-5. Final pass: per rectangle, the samples that continue each pixel's sequence from where the
-   pilot stopped (Cycles' sample subset, same seed), as many as fit in what is left of the
-   budget once the final denoise is set aside; a pacer rescales every next rectangle to the
-   clock.
-6. The passes merged by sample count (radiance and denoising guides), denoised once.
+3. Pilot: the whole frame at a quarter of its resolution, at most 16 samples, for at most a
+   small share of the budget (Cycles' own time limit; the count is read back from Cycles).
+4. Scores: the pilot denoised, its display luminance's gradient per tile
+   (``core/sampling/guided_plan``, which also says why the pilot is thrown away).
+5. Final pass: per rectangle, its samples from the first, as many as fit in what is left of
+   the budget once the final denoise is set aside; a pacer rescales every next rectangle to
+   the clock. Every pixel is rendered in exactly one Cycles session.
+6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
 
 Every setting touched is put back (``preserved_scene``) after success, error or cancel.
 """
@@ -35,22 +34,27 @@ from .tile_render import CyclesWindowRenderer
 
 #: Pixels of the scene-sync render (as the equal-time baselines do it).
 _SYNC_WINDOW = 8
-#: Fixed cost assumed for one Cycles render of a rectangle until the final pass measures it
-#: (a render call, its EXR with the guides written and read back; 2 cores).
+#: Fixed cost assumed for one Cycles render of a rectangle (a render call, its EXR with the
+#: guides written and read back; 2 cores).
 _RENDER_OVERHEAD_S = 0.008
-#: The final denoise is predicted from the half-resolution one: OIDN's time grows with the
-#: pixels, and the compositor's set-up does not (measured on the road scene: 0.07 s at
-#: 256x144 against 0.25 s at 512x288).
-_DENOISE_SCALE = 3.5
-#: Before any denoise has run, its time is guessed from the frame's pixels (road: 0.25 s for
-#: 147456 pixels on 2 cores).
+#: The final denoise is guessed from the frame's pixels (road: 0.25 s for 147456 pixels on
+#: 2 cores), or from the pilot's denoise when that took longer (a loaded machine).
 _DENOISE_SECONDS_PER_PIXEL = 1.7e-6
-#: The pilot's sample cap. Cycles sizes its Sobol table by a render's total count (256 up to
-#: 257 samples), and the final pass continues the pilot's sequences: both must use one
-#: table, or the merged samples lose their stratification.
-_PILOT_MAX_SPP = 256
-#: Below this edge the pilot is scored at full resolution (half would leave too few pixels).
-_HALF_RESOLUTION_MIN = 32
+#: The pilot's sample cap and resolution divisor: 4 spp at a quarter of the resolution scored
+#: the tiles as well as more did on the road scene, for ~1/64 of a 16-spp render's samples.
+_PILOT_MAX_SPP = 16
+_PILOT_REDUCE = 4
+#: The pilot keeps at least this many pixels on its short edge (tiny frames are reduced less).
+_PILOT_MIN_EDGE = 16
+
+
+def pilot_reduce(width: int, height: int) -> int:
+    """The pilot's resolution divisor: ``_PILOT_REDUCE``, halved until the short edge keeps
+    ``_PILOT_MIN_EDGE`` pixels (1 for tiny frames)."""
+    reduce = _PILOT_REDUCE
+    while reduce > 1 and min(width, height) // reduce < _PILOT_MIN_EDGE:
+        reduce //= 2
+    return reduce
 
 
 class _Clock:
@@ -69,12 +73,6 @@ class _Clock:
 
     def resume(self, paused: float) -> None:
         self.waited += time.perf_counter() - paused
-
-
-def _half(pixels: np.ndarray) -> np.ndarray:
-    """2x2 box-filtered half-resolution image (an odd last row or column is dropped)."""
-    height, width = pixels.shape[0] // 2 * 2, pixels.shape[1] // 2 * 2
-    return pixels[:height, :width].reshape(height // 2, 2, width // 2, 2, -1).mean(axis=(1, 3))
 
 
 def render_guided(scene, options: RenderOptions, guided: GuidedOptions,
@@ -120,62 +118,65 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             renderer.render((row, row + side, col, col + side), 1)
             phases["sync"] = clock.now() - began
 
-            # The pilot: Cycles' time limit decides how many samples fit in its share.
-            denoise_guess = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-            pilot_limit = max(0.01, guided.pilot_fraction * (budget - clock.now() - denoise_guess))
+            # The pilot: a quarter of the resolution, a first sample timing it, then as many
+            # as its share allows. (No Cycles time limit: a limit set and unset at the same
+            # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
+            reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
+            pilot_share = guided.pilot_fraction * (budget - clock.now() - reserve)
+            reduce = pilot_reduce(width, height)
             paused = clock.pause()
-            yield 0.05, f"guided: pilot pass ({pilot_limit:.1f} s)"
+            yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
             clock.resume(paused)
             began = clock.now()
-            pilot = renderer.render(None, min(guided.ceiling, _PILOT_MAX_SPP), time_limit=pilot_limit)
+            pilot = renderer.render(None, 1, reduce=reduce)
+            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(pilot.seconds, 1e-6))
+            have = max(1, min(guided.ceiling, _PILOT_MAX_SPP, fit))
+            if have > 1:
+                pilot = renderer.render(None, have, reduce=reduce)
             phases["pilot"] = clock.now() - began
-            have = int(np.max(pilot.samples))
-            image.add(None, pilot.pixels, pilot.samples)
-            guides.add(None, pilot.guides, pilot.samples)
-            tiles.append(tile_entry((0, height, 0, width), pilot) | {"pass": "pilot"})
-            rate = pilot.seconds / max(1.0, float(np.sum(pilot.samples)))    # s per pixel-sample
+            pilot_samples = float(np.sum(pilot.samples) if np.ndim(pilot.samples) else
+                                  pilot.samples * pilot.pixels.shape[0] * pilot.pixels.shape[1])
+            # Seconds per pixel-sample: a pilot pixel traces what a full one does per sample.
+            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / max(1.0, pilot_samples)
+            tiles.append(tile_entry((0, height, 0, width), pilot)
+                         | {"pass": "pilot", "resolution_divisor": reduce})
 
-            # Scores from the pilot denoised at half resolution.
+            # Scores from the denoised pilot.
             paused = clock.pause()
-            yield 0.3, f"guided: scoring the pilot ({have} spp)"
+            yield 0.15, f"guided: scoring the pilot ({have} spp)"
             clock.resume(paused)
             began = clock.now()
-            scale = 2 if min(width, height) >= _HALF_RESOLUTION_MIN else 1
-            merged, merged_guides = image.result(), guides.result()
-            if scale == 2:
-                merged, merged_guides = _half(merged), _half(merged_guides)
+            # Denoised whatever the final image gets: the score is the error a denoised
+            # frame keeps, and a raw pilot's gradient is mostly its noise.
             from .denoise import denoise
 
-            scored = denoise(merged, merged_guides[..., :3], merged_guides[..., 3:6])
+            scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
             scoring_denoise = clock.now() - began
-            scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, scale)
+            scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
             weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
             phases["scoring"] = clock.now() - began
 
             # The final pass: planned for the time left once the final denoise is set aside,
             # then planned again with each of its renders' fixed cost set aside too.
-            denoise_reserve = (_DENOISE_SCALE * scoring_denoise if scale == 2 else scoring_denoise) \
-                if options.denoise else 0.0
+            denoise_reserve = max(reserve, scoring_denoise) if options.denoise else 0.0
             left = budget - clock.now() - denoise_reserve
-            final = plan_final_pass(scores, weights, width, height, guided, have, max(0.0, left) / rate)
-            if final.rects:
-                final = plan_final_pass(scores, weights, width, height, guided, have,
-                                        max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate)
+            final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate)
+            final = plan_final_pass(scores, weights, width, height, guided,
+                                    max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate)
             rects = final.rects
             pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S)
             began = clock.now()
             for index, rect in enumerate(rects):
                 paused = clock.pause()
-                yield 0.35 + 0.6 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
+                yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
                 clock.resume(paused)
                 factor = pacer.scale(budget - clock.now() - denoise_reserve)
-                spp = min(int(round(rect.spp * factor)), guided.ceiling - have)
-                if spp < 1:
-                    continue
-                piece = renderer.render(rect.window, spp, first_sample=have)
+                # Every pixel gets a sample, even when the clock is already out.
+                spp = max(1, min(int(round(rect.spp * factor)), guided.ceiling))
+                piece = renderer.render(rect.window, spp)
                 image.add(rect.window, piece.pixels, spp)
                 guides.add(rect.window, piece.guides, spp)
-                tiles.append(tile_entry(rect.window, piece) | {"pass": "final", "first_sample": have})
+                tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
             phases["final"] = clock.now() - began
 
         began = clock.now()
@@ -188,7 +189,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
     stats["wall_s"] = sum(phases.values())
     stats.update(time_budget_s=budget, guided=guided.to_dict(), pilot_spp=have,
-                 pilot_seconds=pilot.seconds, seconds_per_pixel_sample=rate,
+                 pilot_seconds=pilot.seconds, pilot_resolution_divisor=reduce,
+                 seconds_per_pixel_sample=rate,
                  final_pass=final.to_dict(),
                  denoise_reserved_s=denoise_reserve)
     if stats["wall_s"] > 1.1 * budget:

@@ -23,14 +23,9 @@ time limit when the sample count changes with it (a new count resets Cycles' ses
 reads the limit again); the count Cycles reports in the EXR header is checked against the
 one asked for.
 
-A render may also continue a pixel's sample sequence instead of starting it (``first_sample``):
-Cycles' sample subset renders samples [first, first + count) of the same seed, so passes
-merged by sample count are one render's estimate again, stratification included. The subset
-settings are read when the session resets, which a new total count does; only a new first
-sample at an unchanged total needs the re-sync. Each Cycles session learns Blender 5's volume
-scattering probability guiding afresh, so a pixel split over two sessions is noisier than
-one rendered in one (measured on the road scene: about 3 % more FLIP after denoising per
-extra session at 16 samples).
+The whole frame may also be rendered at a fraction of its resolution (``reduce``: a cheap
+preview of where the image has detail); the resolution changes for that render only and is
+set back after it, and Cycles keeps the synced scene through it (no re-sync on balls_b).
 """
 from __future__ import annotations
 
@@ -50,9 +45,6 @@ from ..scene.probe import render_size
 from .render import ensure_cycles, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
-#: Samples a subset may span: far beyond any count rendered here, so that the subset is
-#: bounded by the total count (set per render) and never by its own length.
-_SUBSET_LENGTH = 1 << 24
 
 
 @dataclass
@@ -67,7 +59,6 @@ class RenderedWindow:
     samples_reported: int | None                 # the count in the EXR header Cycles wrote
     seconds: float                               # wall time of the render call
     guides: np.ndarray | None = None             # (h, w, 6) denoising albedo RGB + normal XYZ
-    first_sample: int = 0                        # index of the first sample of this pass
 
 
 def render_layer(scene):
@@ -109,7 +100,6 @@ class CyclesWindowRenderer:
         cycles.use_layer_samples = "USE"       # see the module docstring
         cycles.use_sample_subset = False
         cycles.sample_offset = 0
-        cycles.sample_subset_length = _SUBSET_LENGTH
         cycles.use_animated_seed = False
         cycles.seed = seed
         render.use_compositing = False
@@ -145,6 +135,20 @@ class CyclesWindowRenderer:
                 self._on_sample(done, total)
 
     # -- rendering -------------------------------------------------------------------------
+    def _render_reduced(self, reduce: int, samples: int, adaptive_threshold, time_limit,
+                        on_sample) -> RenderedWindow:
+        if reduce < 1:
+            raise ValueError(f"reduce must be at least 1 (got {reduce})")
+        render = self.scene.render
+        resolution, full = (render.resolution_x, render.resolution_y), (self.width, self.height)
+        render.resolution_x, render.resolution_y = (max(1, side // reduce) for side in resolution)
+        try:
+            self.width, self.height = render_size(self.scene)
+            return self.render(None, samples, adaptive_threshold, time_limit, on_sample)
+        finally:
+            render.resolution_x, render.resolution_y = resolution
+            self.width, self.height = full
+
     @staticmethod
     def _assign(struct, name: str, value) -> bool:
         """Set a property only when it changes (every assignment makes Cycles re-check that
@@ -166,36 +170,29 @@ class CyclesWindowRenderer:
     def render(self, window: tuple[int, int, int, int] | None, samples: int,
                adaptive_threshold: float | None = None, time_limit: float = 0.0,
                on_sample: Callable[[int, int], None] | None = None,
-               first_sample: int = 0) -> RenderedWindow:
+               reduce: int = 1) -> RenderedWindow:
         """Render ``window`` (row0, row1, col0, col1; rows from the top) or the whole frame.
 
         ``samples`` is Cycles' sample count (the ceiling when ``adaptive_threshold`` or
         ``time_limit`` may stop it earlier; then the returned ``samples`` holds Cycles' own
         count per pixel). ``on_sample(done, total)`` is called as Cycles reports progress.
-        ``first_sample`` > 0 continues each pixel's sequence: the samples rendered are
-        [first_sample, first_sample + samples) of the seed (see the module docstring).
+        ``reduce`` > 1 renders the whole frame at 1/reduce of its resolution (window None).
         """
         import bpy
 
-        if first_sample < 0:
-            raise ValueError(f"first_sample must not be negative (got {first_sample})")
-        if first_sample and (adaptive_threshold is not None or time_limit > 0.0):
-            raise ValueError("a continued pass renders an exact count: no adaptive sampling or time limit")
+        if reduce != 1:
+            return self._render_reduced(reduce, samples, adaptive_threshold, time_limit, on_sample)
         scene, cycles, render = self.scene, self.scene.cycles, self.scene.render
         counted = adaptive_threshold is not None or time_limit > 0.0
         multilayer = counted or self.guides
-        total = first_sample + samples
-        self._assign(cycles, "samples", total)
-        new_count = self._assign(self.layer, "samples", total)   # read at every render, no re-sync
+        self._assign(cycles, "samples", samples)
+        new_count = self._assign(self.layer, "samples", samples)   # read at every render, no re-sync
         new_limit = self._assign(cycles, "time_limit", time_limit)
-        new_subset = self._assign(cycles, "use_sample_subset", first_sample > 0)
-        new_subset |= self._assign(cycles, "sample_offset", first_sample)
         changed = [self._assign(cycles, "use_adaptive_sampling", adaptive_threshold is not None),
                    self._assign(self.layer.cycles, "pass_debug_sample_count", counted),
-                   # A new sample count resets Cycles' session, which re-reads the time limit
-                   # and the subset; only a new limit or subset at the same count needs the
-                   # (costly) re-sync.
-                   (new_limit or new_subset) and not new_count]
+                   # A new sample count resets Cycles' session, which re-reads the time limit;
+                   # only a new limit at the same count needs the (costly) re-sync.
+                   new_limit and not new_count]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).
@@ -246,12 +243,11 @@ class CyclesWindowRenderer:
                                f"for a {shape[1]}x{shape[0]} window {window}")
         reported = attributes.get(f"cycles.{self.layer.name}.samples")
         reported = None if reported is None else int(reported)
-        if reported is not None and reported not in (total, samples):
+        if reported is not None and reported != samples:
             raise RuntimeError(f"Cycles rendered with {reported} samples where {samples} were set")
         if counted:
             rendered = self._status_max or samples
             # The pass holds each pixel's samples divided by the samples the render completed.
             per_pixel = np.rint(passes["Debug Sample Count"][:, :, 0] * rendered).astype(np.float32)
             return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds, guides)
-        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds, guides,
-                              first_sample)
+        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds, guides)

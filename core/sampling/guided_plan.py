@@ -1,21 +1,33 @@
-"""Where a time-budgeted render spends the samples left after its pilot pass (``--mode guided``).
+"""Where a time-budgeted render spends its samples (``--mode guided``).
 
-The guided render (``addon/cycles/guided_render.py``) renders the whole frame once for a
-share of the budget (the pilot), denoises it at half resolution, and from that image scores
-every tile by how much error it is likely to keep after denoising: the mean gradient of the
-denoised pilot's display luminance. Measured on the road scene against a converged reference
-(1024 spp), this score correlates with the per-tile error of a denoised 16-spp render as well
-as the difference of two denoised half-sample pilots does (log-log r = 0.91 for MSE, 0.73 for
-FLIP), for one pilot instead of two, and the error of a denoised frame sits where the image
-has edges, highlights and glows.
+The guided render (``addon/cycles/guided_render.py``) first renders the whole frame at a
+quarter of its resolution with a few samples (the pilot: about 1 % of the samples of the
+render), denoises it, and scores every tile by how much error it is likely to keep after
+denoising: the mean gradient of the denoised pilot's display luminance. Measured on the road
+scene against a converged reference (1024 spp), this score correlates with the per-tile
+error of a denoised 16-spp render as well as the difference of two denoised half-sample
+pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from the low-resolution
+pilot), for one cheap pilot instead of two, and the error of a denoised frame sits where the
+image has edges, highlights and glows.
 
-The rest of the budget goes to the tiles in proportion to ``(score * importance) ** exponent``
-(total samples per pixel, never fewer than the pilot gave). The exponent is gentle because
-FLIP after denoising falls only about as spp^-0.27 on these scenes: moving samples buys MSE
-far more than FLIP, and an aggressive allocation (the paper's XSL map scales samples
-linearly, exponent 1) loses FLIP badly. ``importance`` is the director map (1 everywhere
-unless asked for). Counts are rounded to powers of ``level_ratio`` so that neighbouring
-tiles share them and merge into few renders.
+The budget then goes to the tiles in proportion to ``(score * importance) ** exponent``, every
+pixel rendered from its first sample in one Cycles session. Two findings shape this:
+
+- FLIP after denoising falls only about as spp^-0.27 on these scenes, and its error is spread
+  evenly over the frame (the worst 20 % of 32-px tiles hold ~30 % of it), so moving samples
+  buys MSE far more than FLIP. Even an oracle allocation from the true per-tile error gains
+  only 1.10-1.14x in samples on FLIP (about 2.5x on MSE). The exponent is therefore gentle
+  (0.15 keeps FLIP level with uniform at equal samples and lowers MSE ~7 %); the paper's XSL
+  map scales samples linearly (exponent 1) and loses FLIP badly.
+- Blender 5 learns its volume scattering probability guiding per render session, so a pixel
+  whose samples are split over two sessions is noisier than one rendered in one (about 3 %
+  more FLIP per extra session at 16 spp, even when the second continues the first's sample
+  sequence), and merging two seeds of 8 costs ~5 % FLIP against one render of 16. A
+  full-resolution pilot continued by the final pass therefore loses what it was meant to
+  win; the low-resolution pilot is thrown away instead.
+
+``importance`` is the director map (1 everywhere unless asked for). Counts are rounded to
+powers of ``level_ratio`` so that neighbouring tiles share them and merge into few renders.
 
 Everything here is plain numbers; the clock is read by the caller.
 """
@@ -39,6 +51,10 @@ IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
 #: A tile's score never falls below this share of the frame's mean score, so that flat
 #: tiles, whose pilot gradient is noise-free zero, still get their share.
 SCORE_FLOOR = 0.05
+#: The final pass is cut into at least this many renders, so that the ones at its end can
+#: make up for a region that costs more per sample than the pilot said (a fog box on the
+#: floor costs twice the sky).
+FINAL_PASS_PIECES = 10
 
 
 @dataclass(frozen=True)
@@ -52,7 +68,7 @@ class GuidedOptions:
     max_spp
         Per-pixel ceiling; None: no ceiling but ``UNBOUNDED_SPP``.
     pilot_fraction
-        Share of the budget (after maps and scene sync) the pilot pass may take.
+        Most of the budget (after maps and scene sync) the low-resolution pilot may take.
     exponent
         Allocation exponent on the tile scores (0: uniform).
     importance
@@ -65,8 +81,8 @@ class GuidedOptions:
 
     time_budget: float
     max_spp: int | None = None
-    pilot_fraction: float = 0.25
-    exponent: float = 0.25
+    pilot_fraction: float = 0.05
+    exponent: float = 0.15
     importance: str = "none"
     tile_size: int = 32
     level_ratio: float = 1.5
@@ -175,10 +191,9 @@ def round_to_levels(counts: np.ndarray, ratio: float, anchor: float = 1.0) -> np
 
 @dataclass(frozen=True)
 class FinalPass:
-    """The rectangles of the final pass: each continues its pixels' sample sequences from
-    ``first_sample`` with ``spp`` more samples."""
+    """The rectangles of the final pass: each renders its pixels' ``spp`` samples from the
+    first, in one Cycles session (see the module docstring)."""
 
-    first_sample: int
     rects: list[Rect]
     totals: np.ndarray               # (n_tiles,) planned samples per pixel of each tile
 
@@ -187,29 +202,42 @@ class FinalPass:
         return sum(rect.samples for rect in self.rects)
 
     def to_dict(self) -> dict:
-        return {"first_sample": self.first_sample, "renders": len(self.rects),
-                "samples": self.samples, "rects": [rect.to_dict() for rect in self.rects]}
+        return {"renders": len(self.rects), "samples": self.samples,
+                "rects": [rect.to_dict() for rect in self.rects]}
 
 
 def plan_final_pass(scores: np.ndarray, importance: np.ndarray | None, width: int, height: int,
-                    options: GuidedOptions, have: int, extra_samples: float) -> FinalPass:
+                    options: GuidedOptions, pixel_samples: float) -> FinalPass:
     """The final pass of a guided render: tiles of ``options.tile_size`` (the windows of
-    ``tile_plan.tile_windows``, in that order, as ``scores`` and ``importance`` are),
-    ``have`` samples per pixel already, ``extra_samples`` pixel-samples to add."""
+    ``tile_plan.tile_windows``, in that order, as ``scores`` and ``importance`` are) sharing
+    ``pixel_samples`` pixel-samples, every pixel at least one."""
     windows = tile_windows(width, height, options.tile_size)
     if len(scores) != len(windows) or (importance is not None and len(importance) != len(windows)):
         raise ValueError("one score (and importance) per tile is needed")
     areas = np.array([(r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in windows], np.float64)
     weighted = np.asarray(scores, np.float64) * (1.0 if importance is None else np.asarray(importance, np.float64))
     weights = np.maximum(weighted, 1e-12) ** options.exponent
-    totals = allocate(weights, areas, have, extra_samples, options.ceiling)
+    totals = allocate(weights, areas, 1, pixel_samples - areas.sum(), options.ceiling)
     # Levels anchored at the mean count: a flat allocation stays exact.
-    mean_extra = float((areas * (totals - have)).sum() / areas.sum())
-    extra = round_to_levels(totals - have, options.level_ratio, anchor=round(mean_extra))
-    extra = np.minimum(extra, options.ceiling - have)
+    mean = float((areas * totals).sum() / areas.sum())
+    counts = np.clip(round_to_levels(totals, options.level_ratio, anchor=round(mean)), 1, options.ceiling)
     rects = merge_rects([Rect(r0, r1, c0, c1, int(count))
-                         for (r0, r1, c0, c1), count in zip(windows, extra) if count > 0])
-    return FinalPass(first_sample=int(have), rects=rects, totals=totals)
+                         for (r0, r1, c0, c1), count in zip(windows, counts)])
+    return FinalPass(rects=split_rects(rects, FINAL_PASS_PIECES), totals=totals)
+
+
+def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
+    """``rects`` with any holding more than 1/``pieces`` of all their samples cut into bands
+    of whole rows that do not (a single row is not cut): a render's cost is only known once
+    it is done, and the renders after it make up for it (``BudgetPacer``)."""
+    most = max(1, -(-sum(rect.samples for rect in rects) // pieces))
+    out = []
+    for rect in rects:
+        bands = min(rect.height, -(-rect.samples // most))
+        edges = [rect.row0 + rect.height * k // bands for k in range(bands + 1)]
+        out += [Rect(top, bottom, rect.col0, rect.col1, rect.spp)
+                for top, bottom in zip(edges, edges[1:])]
+    return out
 
 
 class BudgetPacer:
