@@ -21,6 +21,12 @@ def spp_paths(out: Path) -> tuple[Path, Path]:
     return out.with_name(out.stem + "_spp.exr"), out.with_name(out.stem + "_spp.png")
 
 
+def preview_scale(ceiling: int | None, samples: np.ndarray) -> int:
+    """The samples per pixel a _spp.png shows as white: the ceiling, or without one (a
+    guided render without --max-spp) the most any pixel got."""
+    return max(1, int(np.max(samples))) if ceiling is None else int(ceiling)
+
+
 def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: dict,
                          max_spp: int, seed: int, stats_path: str | Path | None = None) -> list[Path]:
     """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given).

@@ -42,9 +42,10 @@ def guided_render(scene, options, budget: dict, progress=None):
 def spp_scale(args, options, outcome) -> int:
     """The samples per pixel the _spp.png shows as white: the ceiling, or for guided without
     one, the most any pixel got."""
-    if args.mode == "guided" and args.max_spp is None:
-        return max(1, int(outcome.samples.max()))
-    return options.max_spp
+    from ...core.sampling.render_files import preview_scale
+
+    unbounded = args.mode == "guided" and args.max_spp is None
+    return preview_scale(None if unbounded else options.max_spp, outcome.samples)
 
 
 def summary_line(mode: str, stats: dict, out: Path) -> str:
