@@ -239,16 +239,27 @@ def test_modal_run_steps_tile_by_tile_and_esc_restores(blender, fog):
     assert blender.context.window_manager.xsl_render_status.last_report == operator.reports[-1][1]
     assert settings_dump(fog) == before
 
-    blender.data.images["XSL Render"]["mean_spp"] = -1.0      # a cancelled run leaves it alone
-    operator, context, _ = modal_harness(blender, selective_job)
+    cancel_midway(blender, fog, before, "tile 2/", "XSL render")        # into the tile renders
+
+
+def cancel_midway(bpy, scene, before: dict, step: str, label: str) -> None:
+    """Run the panel's render modally until its message shows ``step``, then press ESC:
+    every setting comes back and the last result's image is left alone."""
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.operators import job_operator
+    from xsl_render.operators.jobs import selective_job
+
+    image = bpy.data.images["XSL Render"]
+    image["mean_spp"] = -1.0
+    operator, context, _ = modal_harness(bpy, selective_job)
     operator.invoke(context, None)
-    while "tile 2/" not in operator._runner.message:         # into the tile renders
-        assert operator.modal(context, timer) == {"PASS_THROUGH"}
-    assert settings_dump(fog) != before                        # the render borrows settings
+    while step not in operator._runner.message:
+        assert operator.modal(context, SimpleNamespace(type="TIMER", value="NOTHING")) == {"PASS_THROUGH"}
+    assert settings_dump(scene) != before                      # the render borrows settings
     assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"}
-    assert settings_dump(fog) == before
-    assert operator.reports[-1] == ("WARNING", "XSL render cancelled; the scene is as it was")
-    assert blender.data.images["XSL Render"]["mean_spp"] == -1.0
+    assert settings_dump(scene) == before
+    assert operator.reports[-1] == ("WARNING", f"{label} cancelled; the scene is as it was")
+    assert image["mean_spp"] == -1.0
     assert job_operator.running_label() is None and context.window_manager.timers == 0
 
 
@@ -374,17 +385,7 @@ def test_guided_render_in_steps_keeps_its_budget_and_esc_restores(blender, budge
     assert image["mode"] == "guided" and 0.9 * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
     assert ticks >= image["renders"] + 3               # map, sync, pilot, scoring, each rectangle
     assert settings_dump(budget_fog) == before
-
-    image["mean_spp"] = -1.0                            # a cancelled run leaves it alone
-    operator, context, _ = modal_harness(blender, selective_job)
-    operator.invoke(context, None)
-    while "rectangle 2/" not in operator._runner.message:   # into the final pass
-        assert operator.modal(context, timer) == {"PASS_THROUGH"}
-    assert settings_dump(budget_fog) != before                # the render borrows settings
-    assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"}
-    assert settings_dump(budget_fog) == before
-    assert operator.reports[-1] == ("WARNING", "Guided render cancelled; the scene is as it was")
-    assert image["mean_spp"] == -1.0 and job_operator.running_label() is None
+    cancel_midway(blender, budget_fog, before, "rectangle 2/", "Guided render")   # into the final pass
 
 
 def test_guided_animation_gives_every_frame_its_own_budget(blender, budget_fog, tmp_path):
