@@ -19,15 +19,15 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.errors import InputError
-from ..core.farm.files import (FrameFiles, guided_inputs, json_digest, load_plan, maps_inputs,
-                               renderer_version, scene_sha256, valid_plan, valid_tile,
-                               write_plan_record, write_tile)
+from ..core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
+                               scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
 from ..core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ..core.farm.task_groups import plan_group
+from ..core.files import json_digest
 from ..core.maps.files import write_map_set
 from ..core.maps.options import MapOptions
 from ..core.sampling.guided_plan import GuidedOptions
-from ..core.sampling.render_files import preview_scale
+from ..core.sampling.render_files import frame_attributes, preview_scale
 from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.tile_plan import make_plan
 
@@ -158,8 +158,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output:
     stats = guided_frame_record(inputs, {**outcome.stats, "frame": frame, "file": str(scene_path),
                                          "out": str(files.image)})
     scale = preview_scale(guided.max_spp, outcome.samples)
-    attributes = {"xsl_render:mode": stats["mode"], "xsl_render:max_spp": scale,
-                  "xsl_render:seed": options.seed, "xsl_render:mean_spp": float(stats["mean_spp"])}
+    attributes = frame_attributes(stats["mode"], scale, options.seed, stats["mean_spp"])
     write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
     return TaskOutcome(1, done_now=[files.stem], warnings=list(outcome.warnings),
                        seconds=time.perf_counter() - started, stats=stats)

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..sampling.composite import Compositor
+from ..sampling.render_files import frame_attributes
 from .files import RECORD_FORMAT, FrameFiles, json_digest, load_plan, read_tile, valid_tile
 from .frame_outputs import FRAME_KIND, valid_frame_outputs, write_frame_outputs
 from .task_groups import group_plan
@@ -70,9 +71,7 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
         image = denoiser(image, albedo_normal[..., :3], albedo_normal[..., 3:])
         denoise_seconds = time.perf_counter() - tick
     mode = record.mode
-    attributes = {"xsl_render:mode": mode, "xsl_render:max_spp": options.max_spp,
-                  "xsl_render:seed": options.seed,
-                  "xsl_render:mean_spp": float(samples.mean(dtype="float64"))}
+    attributes = frame_attributes(mode, options.max_spp, options.seed, samples.mean(dtype="float64"))
     total = float(samples.sum(dtype="float64"))
     render_seconds = sum(float(tile.get("seconds", 0.0)) for tile in tiles)
     stats = {
