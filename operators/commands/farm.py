@@ -1,8 +1,8 @@
 """``xsl-render farm SCENE.blend --bundle DIR``: an Open Job Description job bundle.
 
 Writes DIR/template.yaml (steps Maps, Tiles and Composite for xs and xsl; one step Render,
-a task per frame, for ``--mode guided --time-budget SECONDS``; see
-``core.farm.job_template``), DIR/parameter_values.yaml and our marker file. Submit DIR to a farm that speaks Open Job
+a task per frame, for ``--mode guided --time-budget SECONDS``; see ``core.farm.job_template``),
+DIR/parameter_values.yaml and our marker file. Submit DIR to a farm that speaks Open Job
 Description (``deadline bundle submit DIR`` on AWS Deadline Cloud), or run it here with
 ``openjd run DIR/template.yaml -p SceneFile=SCENE.blend``. A bundle folder that exists and is
 not ours is refused.
