@@ -1,11 +1,12 @@
-"""Atomic file writes: a temporary name in the same folder, renamed into place."""
+"""Atomic file writes: a temporary name in the same folder, renamed into place (one file, or
+a set of files that belong together)."""
 from __future__ import annotations
 
 import hashlib
 import json
 import os
 import tempfile
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 
@@ -29,20 +30,36 @@ def atomic_path(path: str | os.PathLike):
         raise
 
 
+@contextmanager
+def atomic_paths(*paths: str | os.PathLike):
+    """``atomic_path`` for a set of files that belong together: yield one temporary path per
+    file; only once every one is written are they renamed into place, the last path named
+    last (so a record naming the others goes last); on failure or cancel none is."""
+    with ExitStack() as stack:
+        # Exit order is the reverse of entry: enter the last path first, rename it last.
+        temporaries = [stack.enter_context(atomic_path(path)) for path in reversed(paths)]
+        yield temporaries[::-1]
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
 
 
-def write_text(path: str | os.PathLike, text: str) -> Path:
+def write_text(path: str | os.PathLike, text: str, atomic: bool = True) -> Path:
+    """Write ``text`` as UTF-8, atomically unless ``path`` is already a temporary
+    (``atomic_paths``)."""
+    if not atomic:
+        Path(path).write_text(text, encoding="utf-8")
+        return Path(path)
     with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
     return Path(path)
 
 
-def write_json(path: str | os.PathLike, data) -> Path:
-    return write_text(path, json.dumps(data, indent=2) + "\n")
+def write_json(path: str | os.PathLike, data, atomic: bool = True) -> Path:
+    return write_text(path, json.dumps(data, indent=2) + "\n", atomic)
 
 
 def check_output_path(path: str | os.PathLike, suffix: str) -> Path:

@@ -159,6 +159,25 @@ def scaled_steps(steps: Steps[T], start: float, end: float, prefix: str = "") ->
         steps.close()
 
 
+def timed_steps(steps: Steps[T]) -> Steps[tuple[T, float]]:
+    """``steps`` passed on unchanged, returning ``(result, seconds)``: the seconds spent
+    inside ``steps`` only, not the time whoever drives them waits between two steps (a
+    modal operator's timer ticks), so that work done inside a time budget is counted as
+    the budget counts it."""
+    seconds = 0.0
+    try:
+        while True:
+            started = time.perf_counter()
+            try:
+                step = next(steps)
+            except StopIteration as done:
+                return done.value, seconds + time.perf_counter() - started
+            seconds += time.perf_counter() - started
+            yield step
+    finally:
+        steps.close()
+
+
 class StepRunner:
     """Advance ``steps`` one step at a time (one step per timer tick of a modal operator).
 

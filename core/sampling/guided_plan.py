@@ -46,6 +46,8 @@ from .tile_plan import Rect, merge_rects, tile_windows
 #: The per-pixel ceiling when none is asked for: far above any budget's reach on a CPU, and
 #: well inside what Cycles accepts (2^24 samples).
 UNBOUNDED_SPP = 1 << 16
+#: The longest time budget accepted: a week (anything longer is a typo).
+MAX_TIME_BUDGET = 7 * 24 * 3600.0
 #: Director maps the allocation can weigh the error by.
 IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
 #: A tile's score never falls below this share of the frame's mean score, so that flat
@@ -91,7 +93,7 @@ class GuidedOptions:
         """Raise InputError naming the first impossible option; return self."""
         if not (math.isfinite(self.time_budget) and self.time_budget > 0.0):
             raise InputError(f"--time-budget must be a positive number of seconds (got {self.time_budget})")
-        if self.time_budget > 7 * 24 * 3600:
+        if self.time_budget > MAX_TIME_BUDGET:
             raise InputError(f"--time-budget {self.time_budget:g} s is more than a week")
         if self.max_spp is not None and not 1 <= self.max_spp <= UNBOUNDED_SPP:
             raise InputError(f"--max-spp must be between 1 and {UNBOUNDED_SPP} (got {self.max_spp})")

@@ -98,13 +98,14 @@ def add_tile_arguments(parser) -> None:
                              "and normal, the same in every mode (default on)")
 
 
-def add_guided_arguments(parser) -> None:
-    """The options of ``--mode guided`` (``core.sampling.guided_plan.GuidedOptions``)."""
+def add_guided_arguments(parser, budget_required: bool = False) -> None:
+    """The options of ``--mode guided`` (``core.sampling.guided_plan.GuidedOptions``);
+    ``budget_required`` where there is no other mode."""
     from ...core.sampling.guided_plan import IMPORTANCE_MAPS, GuidedOptions
 
     defaults = GuidedOptions(time_budget=1.0)
     guided = parser.add_argument_group("guided")
-    guided.add_argument("--time-budget", type=float, metavar="SECONDS",
+    guided.add_argument("--time-budget", type=float, metavar="SECONDS", required=budget_required,
                         help="guided: seconds for the whole render (maps, passes, denoising)")
     guided.add_argument("--importance", choices=IMPORTANCE_MAPS, default=defaults.importance,
                         help="guided: director map that weighs the estimated error (default none)")
@@ -128,6 +129,15 @@ def guided_options_from_args(args):
                          pilot_fraction=args.pilot_fraction, exponent=args.guided_exponent,
                          importance=args.importance, tile_size=args.tile_size,
                          level_ratio=args.level_ratio).check()
+
+
+def guided_render_options(guided, seed: int, resolution):
+    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm): its
+    ceiling as max_spp (what the statistics report), its tile size, the seed and resolution."""
+    from ...core.sampling.render_options import RenderOptions
+
+    return RenderOptions(max_spp=guided.ceiling, tile_size=guided.tile_size, seed=seed,
+                         resolution=resolution).check()
 
 
 def render_options_from_args(args):

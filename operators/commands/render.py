@@ -86,7 +86,7 @@ def _render_budget(stats: dict) -> float:
 def _budget(args) -> dict:
     """Check the mode's inputs before the scene is opened; return what the mode needs."""
     if args.mode == "guided":
-        return {"guided": guided_options_from_args(args)}
+        return {"guided": guided_options_from_args(args), "map_options": map_options_from_args(args)}
     if args.time_budget is not None:
         raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
     stats = _read_budget(args.budget_from) if args.budget_from else None

@@ -18,7 +18,7 @@ from ...core.sampling.render_files import write_render_outputs
 
 
 def render_frames(scene, args, options, budget: dict, frames: range, out: Path) -> int:
-    from ...addon.animation import frames_steps, selective_frame, single_render_frame
+    from ...addon.animation import frames_steps, guided_frame, selective_frame, single_render_frame
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
     from ...core.maps.files import write_map_set
@@ -33,6 +33,8 @@ def render_frames(scene, args, options, budget: dict, frames: range, out: Path) 
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
     if args.mode in ("xs", "xsl"):
         job = selective_frame(budget["compute_maps"], options, args.mode, cache_dir)
+    elif args.mode == "guided":
+        job = guided_frame(budget["guided"], budget["map_options"], options, cache_dir)
     else:
         job = single_render_frame(lambda s: render_baseline(s, args, options, budget), args.mode)
 

@@ -6,7 +6,6 @@ two importing each other.
 """
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 
@@ -15,7 +14,7 @@ def render_baseline(scene, args, options, budget: dict, progress=None):
     from ...addon.cycles import selective_render as sr
 
     if args.mode == "guided":
-        return guided_render(scene, args, options, budget["guided"], progress)
+        return guided_render(scene, options, budget, progress)
     if args.mode == "gold":
         return sr.render_gold(scene, options, progress=progress)
     if args.mode == "uniform":
@@ -26,27 +25,27 @@ def render_baseline(scene, args, options, budget: dict, progress=None):
     return sr.render_adaptive(scene, options, budget["seconds"], threshold, progress=progress)
 
 
-def guided_render(scene, args, options, guided, progress=None):
-    """A guided render of the scene at its current frame; the importance map asked for is
-    computed first, inside the budget."""
-    from ...addon.cycles.guided_render import render_guided
-    from ...addon.maps.director_maps import MapWarning, named_map
+def guided_render(scene, options, budget: dict, progress=None):
+    """A guided render of the scene at its current frame: the frame job the panel and the
+    farm run (``addon.animation.guided_frame``), the importance map inside the budget."""
+    from ...addon.animation import guided_frame
+    from ...addon.maps.director_maps import MapWarning
     from ...core.maps.xmap import XMapWarning
-    from .common import map_options_from_args, warnings_as_lines
+    from ...core.progress import run_steps
+    from .common import warnings_as_lines
 
-    started, importance = time.perf_counter(), None
-    if guided.importance != "none":
-        with warnings_as_lines(MapWarning, XMapWarning):
-            importance = named_map(scene, guided.importance, map_options_from_args(args), options.resolution)
-    return render_guided(scene, options, guided, importance, time.perf_counter() - started, progress)
+    job = guided_frame(budget["guided"], budget["map_options"], options)
+    with warnings_as_lines(MapWarning, XMapWarning):
+        return run_steps(job(scene), progress).outcome
 
 
 def spp_scale(args, options, outcome) -> int:
     """The samples per pixel the _spp.png shows as white: the ceiling, or for guided without
     one, the most any pixel got."""
-    if args.mode == "guided" and args.max_spp is None:
-        return max(1, int(outcome.samples.max()))
-    return options.max_spp
+    from ...core.sampling.render_files import preview_scale
+
+    unbounded = args.mode == "guided" and args.max_spp is None
+    return preview_scale(None if unbounded else options.max_spp, outcome.samples)
 
 
 def summary_line(mode: str, stats: dict, out: Path) -> str:
