@@ -6,9 +6,10 @@ frame's maps share one ray cache folder; its key is the camera and the geometry,
 only the medium is animated, frames 2..N reuse the rays of frame 1 and only integrate the
 new densities along them (a moving camera or object simply recasts them).
 
-Used by ``xsl-render render --frames`` (and the batch entry) and by the panel's render
-operators, as steps (``core.progress``): the command line drives them in one go, the panel
-one step per timer tick.
+The guided render's frame job (``guided_frame``) computes its importance map inside the
+frame's own time budget. Used by ``xsl-render render`` (and the batch entry), the farm's
+guided task and the panel's render operators, as steps (``core.progress``): the command line
+drives them in one go, the panel one step per timer tick.
 """
 from __future__ import annotations
 
@@ -17,14 +18,18 @@ from typing import Callable, Sequence
 
 from ..core.maps.files import MapSet
 from ..core.maps.options import MapOptions
-from ..core.progress import Steps, scaled_steps
+from ..core.progress import Steps, scaled_steps, timed_steps
+from ..core.sampling.guided_plan import GuidedOptions
 from ..core.sampling.render_options import RenderOptions
+from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
-from .maps.director_maps import map_steps
+from .maps.director_maps import map_steps, named_map_steps
 from .scene.state import preserved_scene
 
 #: Share of a selective frame's progress bar given to its maps.
 MAP_SHARE = 0.25
+#: Share of a guided frame's progress bar given to its importance map (when it has one).
+IMPORTANCE_SHARE = 0.15
 
 
 @dataclass
@@ -74,6 +79,28 @@ def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
             MAP_SHARE, 1.0)
         outcome.stats["maps"] = maps_summary(maps)
         return FrameResult(scene.frame_current, outcome, maps)
+
+    return steps
+
+
+def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options: RenderOptions,
+                 cache_dir=None) -> FrameJob:
+    """A frame job for the guided render within ``guided.time_budget``: the importance map
+    it asks for first (rays cached in ``cache_dir``), inside the budget (its seconds, not the
+    time spent waiting between steps, are passed on as spent), then the guided render. The
+    command line, the farm and the panel all render guided frames through this job."""
+    guided.check()
+
+    def steps(scene) -> Steps[FrameResult]:
+        importance, map_seconds, start = None, 0.0, 0.0
+        if guided.importance != "none":
+            maps = named_map_steps(scene, guided.importance, map_options, options.resolution, cache_dir)
+            importance, map_seconds = yield from scaled_steps(
+                timed_steps(maps), 0.0, IMPORTANCE_SHARE, f"{guided.importance.upper()} map: ")
+            start = IMPORTANCE_SHARE
+        outcome = yield from scaled_steps(guided_steps(scene, options, guided, importance, map_seconds),
+                                          start, 1.0)
+        return FrameResult(scene.frame_current, outcome)
 
     return steps
 

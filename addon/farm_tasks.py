@@ -1,9 +1,12 @@
-"""The Blender side of a farm job's tasks: the maps of a frame, and a share of its rectangles.
+"""The Blender side of a farm job's tasks: the maps of a frame, a share of its rectangles,
+or (a guided job) the whole frame within its time budget.
 
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
-``core.farm.task_groups``) before Blender opens the scene, so a task with nothing left to do
-returns at once. The pixels come from ``selective_render.render_rect``, the same code
-``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan.
+``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
+task with nothing left to do returns at once. The pixels come from
+``selective_render.render_rect`` and ``animation.guided_frame``, the same code
+``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
+(selective), or is the render ``xsl-render render --mode guided`` makes (guided).
 """
 from __future__ import annotations
 
@@ -16,11 +19,15 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.errors import InputError
-from ..core.farm.files import (FrameFiles, load_plan, maps_inputs, renderer_version, scene_sha256,
-                               valid_plan, valid_tile, write_plan_record, write_tile)
+from ..core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
+                               scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
+from ..core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ..core.farm.task_groups import plan_group
+from ..core.files import json_digest
 from ..core.maps.files import write_map_set
 from ..core.maps.options import MapOptions
+from ..core.sampling.guided_plan import GuidedOptions
+from ..core.sampling.render_files import frame_attributes, preview_scale
 from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.tile_plan import make_plan
 
@@ -36,6 +43,7 @@ class TaskOutcome:
     reused: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    stats: dict | None = None       # a finished frame's statistics (the guided task)
 
 
 def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
@@ -119,3 +127,38 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
                 log(f"rendered {name} at {rect.spp} spp in {piece.rendered.seconds:.2f} s")
     outcome.seconds = time.perf_counter() - started
     return outcome
+
+
+def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
+                    guided: GuidedOptions, map_options: MapOptions, options: RenderOptions) -> TaskOutcome:
+    """Render ``frame`` with the guided sampler within ``guided.time_budget`` (its importance
+    map inside the budget) unless its files are finished for the same inputs; write the
+    image, samples and statistics as one set (``core.farm.frame_outputs``). ``options``:
+    the resolution, seed and denoising; its ``max_spp`` the ceiling the statistics report.
+    ``TaskOutcome.warnings`` holds the render's (a budget overrun among them)."""
+    from .scene.blend_session import check_blend_file
+
+    started = time.perf_counter()
+    files = FrameFiles(Path(output), frame)
+    check_blend_file(scene_path)
+    uses_maps = guided.importance != "none"
+    inputs = guided_inputs(scene_sha256(scene_path), scene_name, frame, guided.to_dict(),
+                           map_options.to_dict() if uses_maps else None, options)
+    finished = valid_frame_outputs(files, json_digest(inputs))
+    if finished is not None:
+        return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started, stats=finished)
+
+    from ..core.progress import run_steps
+    from .animation import guided_frame
+    from .scene.blend_session import open_blend
+
+    scene = open_blend(scene_path, scene_name)
+    scene.frame_set(frame)                  # the opened copy only; the file is never written
+    outcome = run_steps(guided_frame(guided, map_options, options)(scene)).outcome
+    stats = guided_frame_record(inputs, {**outcome.stats, "frame": frame, "file": str(scene_path),
+                                         "out": str(files.image)})
+    scale = preview_scale(guided.max_spp, outcome.samples)
+    attributes = frame_attributes(stats["mode"], scale, options.seed, stats["mean_spp"])
+    write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
+    return TaskOutcome(1, done_now=[files.stem], warnings=list(outcome.warnings),
+                       seconds=time.perf_counter() - started, stats=stats)

@@ -1,10 +1,12 @@
 """The objective validation of the paper (sections 5 and 6.1) on real scenes, resumable.
 
 For each scene: the director maps, the gold standard, the selective renders (X only, S only,
-XS, XSL, XSL without MinBound where asked), uniform and Cycles adaptive sampling at the wall
-time the XSL run took (maps included), and MSE, FLIP and VDP of each against the gold
-standard. Every finished step is kept on disk with the hash of its inputs
-(``core.validation.store``) and reused by the next run, so a run killed midway continues.
+XS, XSL, XSL without MinBound where asked), uniform sampling at fractions of the ceiling,
+uniform and Cycles adaptive sampling at the wall time the XSL run took (maps included); MSE,
+FLIP and VDP of each against the converged reference (``addon.validation.reference``: cached,
+or rendered once) and, the paper's measure, of each but gold against the gold standard.
+Every finished step is kept on disk with the hash of its inputs (``core.validation.store``)
+and reused by the next run, so a run killed midway continues.
 """
 from __future__ import annotations
 
@@ -12,23 +14,22 @@ import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
-from ..core.errors import Cancelled
 from ..core.files import write_json
 from ..core.imageio import write_exr, write_png
 from ..core.maps.director import xs_map, xsl_map
 from ..core.maps.files import read_map_set, write_map_set
 from ..core.maps.options import MapOptions
+from ..core.progress import ProgressCallback, WeightedSteps
 from ..core.sampling.render_options import RenderOptions
 from ..core.validation.compare import compare_with_gold
 from ..core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
                                     map_seconds, scaled_size, scene_variants)
+from ..core.validation.reference import default_reference_spp, find_reference
 from ..core.validation.results import scene_summary
 from ..core.validation.store import file_sha256, inputs_hash, read_record, write_record
 from ..core.validation.vdp import vdp_unavailable_reason
 
-Progress = Callable[[float, str], "bool | None"]
 #: Relative cost of each step, in gold renders, for the overall progress fraction.
 STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4,
                 "metrics": 0.1}
@@ -52,54 +53,24 @@ class SceneJob:
         return scene_variants(settings.variants, self.compare_minbound)
 
 
-class _Steps:
-    """Overall progress over steps of unequal weight; a True answer from the callback
-    (Ctrl-C) stops the run between steps and inside renders (``core.progress``)."""
-
-    def __init__(self, callback: Progress | None, weights: list[float]):
-        self.callback = callback
-        self.total = sum(weights) or 1.0
-        self.weights = weights
-        self.done = 0.0
-        self.index = 0
-
-    def sub(self, label: str, echo: str = "") -> Progress:
-        """A callback for the current step; ``echo`` is a prefix of the step's own messages
-        that the label already says (the render functions start theirs with the mode)."""
-        start, weight = self.done, self.weights[self.index]
-
-        def report(fraction: float, message: str):
-            if self.callback is None:
-                return False
-            if echo and message.startswith(echo):
-                message = message[len(echo):]
-            return self.callback((start + weight * min(1.0, max(0.0, fraction))) / self.total,
-                                 f"{label}: {message}")
-        return report
-
-    def begin(self, label: str) -> None:
-        if self.callback is not None and self.callback(self.done / self.total, label):
-            raise Cancelled("cancelled")
-
-    def finish(self) -> None:
-        self.done += self.weights[self.index]
-        self.index += 1
-
-
 def plan_weights(jobs: list[SceneJob], settings: ValidationSettings) -> list[float]:
-    """The steps' weights, in plan order; a render costs in proportion to its ceiling."""
+    """The steps' weights, in plan order; a render costs in proportion to its samples (the
+    reference's weight assumes it must be rendered; a cached one is reweighted)."""
     weights = []
     for job in jobs:
         variants = job.variants(settings)
-        ceiling = (job.max_spp or settings.max_spp) / settings.max_spp
+        spp = job.max_spp or settings.max_spp
+        ceiling = spp / settings.max_spp
         weights += [STEP_WEIGHTS["maps"]] * len({v.map_options.minbound for v in variants if v.map_options})
-        weights += [STEP_WEIGHTS[v.kind] * ceiling for v in variants]
+        weights += [(v.spp_fraction if v.spp_fraction else STEP_WEIGHTS[v.kind]) * ceiling for v in variants]
         weights += [STEP_WEIGHTS["metrics"]] * (len(variants) - 1)
+        weights.append((settings.reference_spp or default_reference_spp(spp)) / settings.max_spp)
+        weights += [STEP_WEIGHTS["metrics"]] * len(variants)
     return weights
 
 
 def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: str | Path,
-                   progress: Progress | None = None) -> dict:
+                   progress: ProgressCallback | None = None) -> dict:
     """Validate every scene in ``jobs`` into ``out_dir``; returns (and writes) results.json.
 
     The result holds, per scene, each variant's timing, samples and metrics, whether the
@@ -114,7 +85,7 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
     results = {"settings": settings.to_dict(),
                "vdp": {"ran": vdp_reason is None, "skipped": vdp_reason},
                "scenes": {}, "rendered": 0, "reused": 0}
-    steps = _Steps(progress, plan_weights(jobs, settings))
+    steps = WeightedSteps(progress, plan_weights(jobs, settings))
     for job in jobs:
         options = settings.render_options(job.max_spp)
         results["scenes"][job.name] = _SceneRun(job, settings, options, out_dir, steps, results).run()
@@ -124,7 +95,7 @@ def run_validation(jobs: list[SceneJob], settings: ValidationSettings, out_dir: 
 
 class _SceneRun:
     def __init__(self, job: SceneJob, settings: ValidationSettings, options: RenderOptions,
-                 out_dir: Path, steps: _Steps, results: dict):
+                 out_dir: Path, steps: WeightedSteps, results: dict):
         self.job, self.settings, self.options = job, settings, options
         self.out_dir, self.steps, self.results = out_dir, steps, results
         self.folder = out_dir / job.name
@@ -147,10 +118,9 @@ class _SceneRun:
 
             self.scene = open_blend(self.job.path)
         if warm and not self.warm:
-            from .cycles.selective_render import render_uniform
+            from .validation.contestants import warm_up
 
-            # One tiny render first, so that no timed render pays Cycles' one-time start-up.
-            render_uniform(self.scene, RenderOptions(max_spp=1, resolution=(8, 8)), spp=1)
+            warm_up(self.scene)         # no timed render pays Cycles' one-time start-up
             self.warm = True
         return self.scene
 
@@ -166,9 +136,12 @@ class _SceneRun:
         for variant in variants:
             if variant.name != GOLD:
                 self.compare(variant)
+        reference = self.reference()
+        for variant in variants:
+            self.compare_with_reference(variant, reference)
         return scene_summary(self.job, self.sha256, self.size, self.options, variants, self.records,
                              {mb: info for mb, (_, _, info) in self.maps.items()}, self.warnings,
-                             self.reused)
+                             self.reused, reference.to_dict())
 
     def scene_size(self) -> tuple[int, int]:
         """The scene's own render size (opens the .blend, renders nothing)."""
@@ -252,6 +225,8 @@ class _SceneRun:
             director, _, seconds = self.director(variant)
             outcome = sr.render_selective(scene, director, options, progress=progress,
                                           mode=variant.name, map_seconds=seconds)
+        elif variant.kind == "uniform" and variant.spp_fraction is not None:
+            outcome = sr.render_uniform(scene, options, spp=variant.spp(options.max_spp), progress=progress)
         elif variant.kind == "uniform":
             outcome = sr.render_uniform(scene, options, seconds=inputs["budget_s"], progress=progress)
         else:
@@ -285,5 +260,43 @@ class _SceneRun:
                                            self.folder / "heatmaps" / variant.name, vdp=self.settings.vdp)
             comparison["heatmaps"] = {k: self.rel(Path(v)) for k, v in comparison["heatmaps"].items()}
             record.update(comparison=comparison, metrics_hash=digest)
+            write_record(self.folder / f"{variant.name}.json", record)
+        self.steps.finish()
+
+    # -- the converged reference ----------------------------------------------------------
+    def reference(self):
+        """The scene's converged reference at this size: cached (shipped with the repository,
+        or in the user cache) or rendered now and cached."""
+        from .validation.reference import ensure_reference, reference_inputs
+
+        scene = self.open_scene(warm=False)
+        inputs = reference_inputs(scene, self.job.path, spp=self.settings.reference_spp,
+                                  resolution=self.size, max_spp=self.options.max_spp,
+                                  blend_sha256=self.sha256)
+        if find_reference(inputs.key) is not None:
+            self.steps.reweight(STEP_WEIGHTS["metrics"])
+        label = f"{self.job.name}: converged reference ({inputs.spp} spp)"
+        self.steps.begin(label)
+        reference = ensure_reference(scene, inputs, progress=self.steps.sub(label, echo="uniform: "),
+                                     file_name=self.job.path.name)
+        self.results["reused" if reference.source != "rendered" else "rendered"] += 1
+        self.steps.finish()
+        return reference
+
+    def compare_with_reference(self, variant: Variant, reference) -> None:
+        """MSE, FLIP and VDP of a run (gold included) against the converged reference."""
+        record = self.records[variant.name]
+        digest = inputs_hash({"step": "reference_metrics", "render": record["input_hash"],
+                              "reference": reference.inputs.key, "vdp": self.settings.vdp})
+        label = f"{self.job.name}: {variant.name} against the reference"
+        self.steps.begin(label)
+        heatmaps = record.get("reference_comparison", {}).get("heatmaps", {})
+        if record.get("reference_metrics_hash") != digest or not all(
+                (self.out_dir / p).is_file() for p in heatmaps.values()):
+            comparison = compare_with_gold(reference.path, self.out_dir / record["files"]["image"],
+                                           self.folder / "heatmaps" / f"{variant.name}_vs_reference",
+                                           vdp=self.settings.vdp)
+            comparison["heatmaps"] = {k: self.rel(Path(v)) for k, v in comparison["heatmaps"].items()}
+            record.update(reference_comparison=comparison, reference_metrics_hash=digest)
             write_record(self.folder / f"{variant.name}.json", record)
         self.steps.finish()

@@ -134,6 +134,19 @@ def parse_frame_size(text: str, name: str | None = "--resolution") -> tuple[int,
     return frame_size(width, height, name)
 
 
+def name_list(text: str, name: str, choices=None, what: str = "name") -> tuple[str, ...]:
+    """'a, b,' -> ('a', 'b'): the names of a comma-separated option (``--scenes``,
+    ``--variants``, ``--curves``). Blanks around names and empty items go, so a trailing comma
+    is harmless; nothing left is an InputError, and so is a name not among ``choices``."""
+    items = tuple(item.strip() for item in str(text).split(",") if item.strip())
+    if not items:
+        raise InputError(f"{name} is empty")
+    for item in items:
+        if choices is not None and item not in choices:
+            raise InputError(f"{name}: unknown {what} '{item}' (choose from {', '.join(choices)})")
+    return items
+
+
 # -- files ------------------------------------------------------------------------------------
 def _reason(error: OSError) -> str:
     return (error.strerror or str(error)).lower()

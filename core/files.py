@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 from . import temporaries
@@ -45,12 +45,13 @@ _open_sets: list[_OutputSet] = []
 
 
 @contextmanager
-def output_set(seal: bool = False):
+def output_set(seal: bool = False, own: bool = False):
     """Every file written through :func:`atomic_path` inside the block appears when the block
     ends without an error, all at once (one rename each, under ``temporaries.gate``), or not
-    at all. A block inside another one joins it. ``seal``: these are the command's last
-    outputs, so a cancel after them is too late (``temporaries.seal``)."""
-    if _open_sets:
+    at all. A block inside another one joins it, unless ``own``: then its files appear at its
+    own end (finished work that outlives the command, such as a cache entry). ``seal``: these
+    are the command's last outputs, so a cancel after them is too late (``temporaries.seal``)."""
+    if _open_sets and not own:
         yield
         return
     current = _OutputSet()
@@ -101,14 +102,34 @@ def atomic_path(path: str | os.PathLike):
         raise
 
 
-def write_text(path: str | os.PathLike, text: str) -> Path:
+@contextmanager
+def atomic_paths(*paths: str | os.PathLike):
+    """``atomic_path`` for a set of files that belong together: yield one temporary path per
+    file, each written in place (``atomic=False``); once every one is written they are renamed
+    into place as a set of their own (:func:`output_set`), the last path named last (so a
+    record naming the others goes last); on failure or cancel none is. Their own, even inside
+    a command's set: what uses this (a cache entry, a farm frame) is read back by the same
+    command, and a later run reuses it."""
+    with output_set(own=True), ExitStack() as stack:
+        # Exits run in reverse order of entry: entering the last path first stages it last,
+        # and a set renames in the order its files were staged.
+        names = [stack.enter_context(atomic_path(path)) for path in reversed(paths)]
+        yield names[::-1]
+
+
+def write_text(path: str | os.PathLike, text: str, atomic: bool = True) -> Path:
+    """Write ``text`` as UTF-8, atomically unless ``path`` is already a temporary
+    (``atomic_paths``)."""
+    if not atomic:
+        Path(path).write_text(text, encoding="utf-8")
+        return Path(path)
     with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
     return Path(path)
 
 
-def write_json(path: str | os.PathLike, data) -> Path:
-    return write_text(path, json.dumps(data, indent=2) + "\n")
+def write_json(path: str | os.PathLike, data, atomic: bool = True) -> Path:
+    return write_text(path, json.dumps(data, indent=2) + "\n", atomic)
 
 
 def file_sha256(path: str | os.PathLike) -> str:

@@ -55,6 +55,17 @@ def image_channel_names(path: str | os.PathLike) -> list[str]:
         image.close()
 
 
+def image_attributes(path: str | os.PathLike) -> dict[str, object]:
+    """The header attributes of an image file (e.g. ``xsl_render:seed`` of a reference)."""
+    image = oiio.ImageInput.open(str(path))
+    if image is None:
+        raise InputError(f"cannot read image {path}")
+    try:
+        return {attr.name: attr.value for attr in image.spec().extra_attribs}
+    finally:
+        image.close()
+
+
 def image_is_float(path: str | os.PathLike) -> bool:
     """True when the file stores floating-point pixels (OpenEXR, float TIFF, Radiance HDR):
     by convention scene-linear, where 8- and 16-bit integer files are display-referred."""
@@ -83,12 +94,13 @@ def _default_channels(count: int) -> list[str]:
 
 
 def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: list[str] | None = None,
-              attributes: dict[str, object] | None = None) -> Path:
+              attributes: dict[str, object] | None = None, atomic: bool = True) -> Path:
     """Write a float32 OpenEXR (ZIP compressed) atomically.
 
     A 2-D array becomes one channel named ``Y``. Refuses NaN and Inf: a map with them
     is a bug upstream and must not reach a file; and a name without ``.exr``, under which
-    OpenImageIO would write another format.
+    OpenImageIO would write another format. ``atomic=False`` writes ``path`` itself: only for
+    a path that is already a temporary (``core.files.atomic_paths``).
     """
     if Path(path).suffix.lower() != ".exr":
         raise ValueError(f"write_exr writes OpenEXR files; {path} does not end in .exr")
@@ -101,11 +113,13 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: list[st
     spec.attribute("compression", "zip")
     for key, value in (attributes or {}).items():
         spec.attribute(key, value if isinstance(value, (int, float)) else str(value))
-    return _write(path, data, spec)
+    return _write(path, data, spec, atomic)
 
 
-def write_png(path: str | os.PathLike, array: np.ndarray, encode_srgb: bool = False) -> Path:
-    """Write an 8-bit PNG preview of values in [0, 1] (clipped) atomically.
+def write_png(path: str | os.PathLike, array: np.ndarray, encode_srgb: bool = False,
+              atomic: bool = True) -> Path:
+    """Write an 8-bit PNG preview of values in [0, 1] (clipped) atomically (``atomic`` as
+    in ``write_exr``).
 
     ``encode_srgb`` applies the sRGB transfer curve first (for linear images); maps are
     written as they are, so a grey level in the PNG is the map value.
@@ -116,23 +130,31 @@ def write_png(path: str | os.PathLike, array: np.ndarray, encode_srgb: bool = Fa
     data = np.round(data * 255.0).astype(np.uint8)
     spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], oiio.UINT8)
     spec.channelnames = tuple(_default_channels(data.shape[2]))
-    return _write(path, np.ascontiguousarray(data), spec)
+    return _write(path, np.ascontiguousarray(data), spec, atomic)
 
 
-def _write(path: str | os.PathLike, data: np.ndarray, spec: "oiio.ImageSpec") -> Path:
+def _write(path: str | os.PathLike, data: np.ndarray, spec: "oiio.ImageSpec", atomic: bool = True) -> Path:
     path = Path(path)
+    if not atomic:
+        _write_to(path, path, data, spec)
+        return path
     with atomic_path(path) as tmp:
-        out = oiio.ImageOutput.create(str(tmp))
-        if out is None:
-            raise InputError(f"cannot write {path}: {oiio.geterror().strip() or 'unknown format'}")
-        try:
-            if not out.open(str(tmp), spec):
-                raise InputError(f"cannot write {path}: {out.geterror().strip()}")
-            if not out.write_image(data):
-                raise InputError(f"cannot write {path}: {out.geterror().strip()}")
-        finally:
-            out.close()
+        _write_to(path, tmp, data, spec)
     return path
+
+
+def _write_to(path: Path, target: Path, data: np.ndarray, spec: "oiio.ImageSpec") -> None:
+    """Write ``data`` to ``target`` (``path`` or its temporary; errors name ``path``)."""
+    out = oiio.ImageOutput.create(str(target))
+    if out is None:
+        raise InputError(f"cannot write {path}: {oiio.geterror().strip() or 'unknown format'}")
+    try:
+        if not out.open(str(target), spec):
+            raise InputError(f"cannot write {path}: {out.geterror().strip()}")
+        if not out.write_image(data):
+            raise InputError(f"cannot write {path}: {out.geterror().strip()}")
+    finally:
+        out.close()
 
 
 def linear_to_srgb(linear: np.ndarray) -> np.ndarray:

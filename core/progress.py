@@ -81,6 +81,51 @@ class TileProgress:
         return step
 
 
+class WeightedSteps:
+    """Overall progress of a job made of steps of unequal weight, run one after another.
+
+    ``begin(label)`` reports the start of the next step (a True answer from the callback,
+    Ctrl-C, raises ``Cancelled`` there, between steps); ``sub(label)`` is a callback for the
+    step's own progress, mapped onto its share of the whole (a render reached through it
+    stops at its next safe point); ``finish()`` moves on. ``reweight`` changes a step's
+    weight once its cost is known (a cached reference costs nothing).
+    """
+
+    def __init__(self, callback: ProgressCallback | None, weights: list[float]):
+        self.callback = callback
+        self.weights = list(weights)
+        self.total = sum(self.weights) or 1.0
+        self.done = 0.0
+        self.index = 0
+
+    def reweight(self, weight: float) -> None:
+        """Give the current step another weight (before it reports anything)."""
+        self.weights[self.index] = weight
+        self.total = sum(self.weights) or 1.0
+
+    def sub(self, label: str, echo: str = "") -> ProgressCallback:
+        """A callback for the current step; ``echo`` is a prefix of the step's own messages
+        that the label already says (the render functions start theirs with the mode)."""
+        start, weight = self.done, self.weights[self.index]
+
+        def report(fraction: float, message: str):
+            if self.callback is None:
+                return False
+            if echo and message.startswith(echo):
+                message = message[len(echo):]
+            return self.callback((start + weight * min(1.0, max(0.0, fraction))) / self.total,
+                                 f"{label}: {message}")
+        return report
+
+    def begin(self, label: str) -> None:
+        if self.callback is not None and self.callback(self.done / self.total, label):
+            raise Cancelled("cancelled")
+
+    def finish(self) -> None:
+        self.done += self.weights[self.index]
+        self.index += 1
+
+
 def run_steps(steps: Steps[T], callback: ProgressCallback | None = None) -> T:
     """Drive ``steps`` to the end, reporting each step to ``callback``; return its result.
 
@@ -110,6 +155,25 @@ def scaled_steps(steps: Steps[T], start: float, end: float, prefix: str = "") ->
             except StopIteration as done:
                 return done.value
             yield start + (end - start) * min(1.0, max(0.0, fraction)), prefix + message
+    finally:
+        steps.close()
+
+
+def timed_steps(steps: Steps[T]) -> Steps[tuple[T, float]]:
+    """``steps`` passed on unchanged, returning ``(result, seconds)``: the seconds spent
+    inside ``steps`` only, not the time whoever drives them waits between two steps (a
+    modal operator's timer ticks), so that work done inside a time budget is counted as
+    the budget counts it."""
+    seconds = 0.0
+    try:
+        while True:
+            started = time.perf_counter()
+            try:
+                step = next(steps)
+            except StopIteration as done:
+                return done.value, seconds + time.perf_counter() - started
+            seconds += time.perf_counter() - started
+            yield step
     finally:
         steps.close()
 

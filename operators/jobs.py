@@ -18,7 +18,7 @@ from ..core.checks import writable_file
 from ..core.errors import InputError
 from ..core.frames import frame_path, has_frame_marker
 from ..core.maps.files import MapSet
-from ..core.panel.settings import map_options, render_options
+from ..core.panel.settings import guided_options, map_options, render_options, uses_budget
 from ..core.progress import Steps
 from ..core.sampling.render_files import write_render_outputs
 
@@ -76,14 +76,22 @@ def maps_report(maps: MapSet) -> str:
 
 # -- renders -------------------------------------------------------------------------------
 def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
-    """Maps, then the selective render driven by the director map chosen in the panel."""
-    from ..addon.animation import selective_frame
+    """The panel's sampler: maps, then the selective render driven by the director map
+    chosen in the panel; or, with the Time Budget sampler, the guided render within the
+    budget (its importance map computed first, inside the budget; every frame of an
+    animation gets its own budget)."""
+    from ..addon.animation import guided_frame, selective_frame
 
     settings = scene.xsl_render
-    mode = settings.director.lower()
     options = render_options(settings)
-    frame_job = selective_frame(map_options(settings), options, mode, ray_cache_dir(scene))
-    label = f"{mode.upper()} render"
+    if uses_budget(settings):
+        guided = guided_options(settings)
+        frame_job = guided_frame(guided, map_options(settings), options, ray_cache_dir(scene))
+        label = "Guided render"
+    else:
+        mode = settings.director.lower()
+        frame_job = selective_frame(map_options(settings), options, mode, ray_cache_dir(scene))
+        label = f"{mode.upper()} render"
     if animation:
         return _animation_job(scene, label, frame_job, options, filepath, gold=False)
     return Job(label, frame_job(scene), _still_finish(scene, options, filepath, gold=False))
@@ -146,9 +154,14 @@ def _still_finish(scene, options, filepath: str, gold: bool):
 
 def render_report(stats: dict) -> str:
     width, height = stats["resolution"]
+    head = f"{stats['mode'].upper()} {width}x{height}: mean {stats['mean_spp']:.1f} spp"
+    if "time_budget_s" in stats and "guided" in stats:
+        importance = stats["guided"]["importance"]
+        weighed = "" if importance == "none" else f", error weighed by {importance.upper()}"
+        return (f"{head} (ceiling {stats['max_spp']}{weighed}) in {stats['renders']} render(s), "
+                f"{stats['wall_s']:.1f} s of a {stats['time_budget_s']:g} s budget")
     share = 100.0 * stats["total_samples"] / max(1, stats["gold_samples"])
-    return (f"{stats['mode'].upper()} {width}x{height}: mean {stats['mean_spp']:.1f} spp "
-            f"({share:.0f}% of the gold standard's samples) in {stats['renders']} render(s), "
+    return (f"{head} ({share:.0f}% of the gold standard's samples) in {stats['renders']} render(s), "
             f"{stats['wall_s']:.1f} s")
 
 
@@ -184,6 +197,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
             show_maps(result.maps)
         maps = outcome.stats.get("maps", {})
         return {"frame": result.frame, "path": path, "mean_spp": outcome.stats["mean_spp"],
+                "wall_s": outcome.stats["wall_s"], "time_budget_s": outcome.stats.get("time_budget_s"),
                 "ray_cache_hit": maps.get("ray_cache_hit"), "warnings": list(outcome.warnings)
                 + list(maps.get("warnings", []))}
 

@@ -1,6 +1,7 @@
 """``bpy.ops.xsl.render_selective`` and ``bpy.ops.xsl.render_gold``: the panel's renders.
 
-Settings come from ``scene.xsl_render`` (the panel). The result is shown as images
+Settings come from ``scene.xsl_render`` (the panel); its sampler decides whether
+``render_selective`` renders selectively (the paper) or guided within a time budget. The result is shown as images
 ("XSL Render" and "XSL Samples", or "XSL Gold" and "XSL Gold Samples") and, with
 ``filepath`` or ``animation``, written as EXR files as ``xsl-render render`` writes them.
 """
@@ -23,7 +24,9 @@ _FILEPATH = bpy.props.StringProperty(
 
 class XSL_OT_render_selective(JobOperator, bpy.types.Operator):
     """Render with samples where a viewer will notice them: the panel's director map (XS or
-    XSL) scales Max Samples per pixel; result in the "XSL Render" and "XSL Samples" images"""
+    XSL) scales Max Samples per pixel, or (Time Budget sampler) the guided render spends the
+    time budget where the denoised frame keeps its error; result in the "XSL Render" and
+    "XSL Samples" images"""
 
     bl_idname = "xsl.render_selective"
     bl_label = "Selective Render"

@@ -12,6 +12,20 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "example_blends"
 
 
+@pytest.fixture(scope="session", autouse=True)
+def reference_cache(tmp_path_factory):
+    """Every test (and every command a test runs) keeps converged references in a folder of
+    its own session, never in the user's cache (``core.validation.reference.cache_root``)."""
+    folder = tmp_path_factory.mktemp("xsl_render_cache")
+    saved = os.environ.get("XSL_RENDER_CACHE")
+    os.environ["XSL_RENDER_CACHE"] = str(folder)
+    yield folder
+    if saved is None:
+        os.environ.pop("XSL_RENDER_CACHE", None)
+    else:
+        os.environ["XSL_RENDER_CACHE"] = saved
+
+
 @pytest.fixture
 def blender():
     """The bpy module with an empty factory-settings session (Cycles on the CPU)."""

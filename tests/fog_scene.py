@@ -43,6 +43,17 @@ def build_fog_scene(bpy, width: int = 96, height: int = 54, density: float = 0.0
     return scene
 
 
+def saved_fog_scene(folder, width: int, height: int, name: str = "fog.blend"):
+    """Build the fog scene in the running bpy session and save it as ``folder/name``; returns
+    the path (for module-scoped fixtures of command-line tests)."""
+    import bpy
+
+    path = folder / name
+    build_fog_scene(bpy, width, height)
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
 def radial_map(width: int, height: int, mean: float, floor: float = 0.02):
     """A synthetic director map: a Gaussian blob in the middle of the frame on a low floor,
     its width chosen (by bisection) so that the map's mean is ``mean``. A test input only."""

@@ -182,3 +182,66 @@ def test_scene_without_camera_is_refused(cli, blender, tmp_path):
     result = cli("farm", path, "--bundle", tmp_path / "bundle")
     assert result.returncode == 2 and "no active camera" in one_line_error(result)
     assert not (tmp_path / "bundle").exists()
+
+
+GUIDED_BUDGET = 1.5
+GUIDED = ["--mode", "guided", "--time-budget", str(GUIDED_BUDGET), "--importance", "x",
+          "--tile-size", "16", "--seed", "3", "--resolution", "64x36"]
+
+
+@pytest.mark.render
+def test_guided_bundle_renders_every_frame_and_a_rerun_skips_them(cli, tmp_path):
+    bundle = tmp_path / "bundle"
+    result = cli("farm", ROAD, "--bundle", bundle, "--frames", "1-2", *GUIDED)
+    assert result.returncode == 0, result.stderr
+    assert "guided within 1.5 s per frame without a ceiling, importance x, one task per frame" in result.stdout
+    check = openjd("check", bundle / "template.yaml")
+    assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
+
+    run = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
+    assert run.returncode == 0, run.stdout[-3000:]
+    digests = {}
+    for frame in (1, 2):
+        files = FrameFiles(bundle / "output", frame)
+        assert f"frame {frame}: {files.image} written: 64x36" in run.stdout
+        stats = json.loads(files.stats.read_text())
+        assert stats["mode"] == "guided" and stats["time_budget_s"] == GUIDED_BUDGET
+        assert stats["inputs_detail"]["guided"]["importance"] == "x" and stats["seed"] == 3
+        assert stats["inputs_detail"]["map_options"]["minbound"] is True
+        assert stats["phases_s"]["maps"] > 0.0 and stats["mean_spp"] > stats["pilot_spp"] >= 1
+        image = read_image(files.image)
+        assert image.shape == (36, 64, 4) and np.isfinite(image).all() and image[..., :3].max() > 0.0
+        assert read_image(files.spp_image).shape[:2] == (36, 64) and files.spp_preview.is_file()
+        digests[frame] = [hashlib.sha256(path.read_bytes()).hexdigest()
+                          for path in (files.image, files.spp_image, files.stats)]
+    assert not (bundle / "output" / "work").exists()
+
+    rerun = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
+    assert rerun.returncode == 0, rerun.stdout[-3000:]
+    for frame in (1, 2):
+        files = FrameFiles(bundle / "output", frame)
+        assert f"frame {frame}: {files.image} already done" in rerun.stdout
+        assert [hashlib.sha256(path.read_bytes()).hexdigest()
+                for path in (files.image, files.spp_image, files.stats)] == digests[frame]
+
+
+@pytest.mark.parametrize("command,args,message", [
+    ("farm", ["--mode", "guided"], "--mode guided needs --time-budget SECONDS"),
+    ("farm", ["--mode", "guided", "--time-budget", "0"], "--time-budget must be a positive number"),
+    ("farm", ["--mode", "guided", "--time-budget", "-3"], "--time-budget must be a positive number"),
+    ("farm", ["--mode", "guided", "--time-budget", "nan"], "--time-budget must be a positive number"),
+    ("farm", ["--mode", "guided", "--time-budget", "1e9"], "is more than a week"),
+    ("farm", ["--mode", "guided", "--time-budget", "5", "--tasks-per-frame", "2"], "a guided frame is one task"),
+    ("farm", ["--mode", "xsl", "--time-budget", "5"], "--time-budget is for --mode guided"),
+    ("farm-task", ["guided", "--frame", "1", "--scene-name", "road", "--resolution", "64x36",
+                   "--time-budget", "0"], "--time-budget must be a positive number"),
+    ("farm-task", ["guided", "--frame", "1", "--scene-name", "road", "--resolution", "64x36",
+                   "--time-budget", "5", "--max-spp", "-1"], "--max-spp must be between 1 and"),
+])
+def test_bad_guided_options_exit_2_before_any_work(cli, tmp_path, command, args, message):
+    where = ["--bundle", tmp_path / "bundle"] if command == "farm" else ["--output", tmp_path / "bundle"]
+    step, rest = ([], args) if command == "farm" else (args[:1], args[1:])
+    result = cli(command, *step, ROAD, *where, *rest)
+    assert result.returncode == 2
+    assert message in one_line_error(result)
+    assert not (tmp_path / "bundle").exists()

@@ -6,7 +6,7 @@ import pytest
 
 from xsl_render.core.errors import Cancelled, InputError
 from xsl_render.core.frames import frame_path, has_frame_marker, parse_frame_range
-from xsl_render.core.progress import StepRunner, run_steps, scaled_steps
+from xsl_render.core.progress import StepRunner, run_steps, scaled_steps, timed_steps
 
 
 @pytest.mark.parametrize("text, frames", [
@@ -95,3 +95,29 @@ def test_scaled_steps_and_the_step_runner():
     runner.advance()
     runner.cancel()                       # ESC: the inner generator's clean-up runs now
     assert log == ["closed"] and runner.done
+
+
+def test_timed_steps_count_the_work_not_the_wait_between_steps():
+    import time
+
+    log = []
+
+    def working(seconds: float):
+        try:
+            for index in range(3):
+                time.sleep(seconds)
+                yield index / 3, f"step {index}"
+            time.sleep(seconds)
+            return "done"
+        finally:
+            log.append("closed")
+
+    runner = StepRunner(timed_steps(working(0.02)))
+    while not runner.advance():
+        time.sleep(0.05)                   # a modal operator waiting for its next tick
+    result, seconds = runner.result
+    assert result == "done" and 0.08 <= seconds < 0.08 + 0.1 and log == ["closed"]
+    runner = StepRunner(timed_steps(working(0.0)))
+    runner.advance()
+    runner.cancel()
+    assert log == ["closed", "closed"]

@@ -1,11 +1,14 @@
 """Image files: round trips, atomic writes, refusing NaN, clear errors for bad files."""
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from xsl_render.core.errors import InputError
-from xsl_render.core.files import atomic_path
+from xsl_render.core.files import atomic_path, atomic_paths
 from xsl_render.core.imageio import image_channel_names, read_image, write_exr, write_png
 
 
@@ -48,6 +51,30 @@ def test_atomic_path_replaces_on_success(tmp_path):
     with atomic_path(target) as tmp:
         tmp.write_text("new")
     assert target.read_text() == "new" and len(list(tmp_path.iterdir())) == 1
+
+
+def test_atomic_paths_rename_the_whole_set_last_named_last_or_nothing(tmp_path, monkeypatch):
+    names = ["a.exr", "b.png", "record.json"]
+    for name in names:
+        (tmp_path / name).write_text("old")
+    with pytest.raises(RuntimeError):
+        with atomic_paths(*(tmp_path / name for name in names)) as temporaries:
+            temporaries[0].write_text("new")
+            temporaries[1].write_text("new")
+            raise RuntimeError("killed before the record")
+    assert sorted(p.name for p in tmp_path.iterdir()) == names
+    assert all((tmp_path / name).read_text() == "old" for name in names)
+
+    renamed, replace = [], os.replace
+    monkeypatch.setattr(os, "replace", lambda src, dst: (renamed.append(Path(dst).name), replace(src, dst)))
+    with atomic_paths(*(tmp_path / name for name in names)) as temporaries:
+        assert [t.suffix for t in temporaries] == [".exr", ".png", ".json"]
+        for tmp in temporaries:
+            tmp.write_text("new")
+        assert all((tmp_path / name).read_text() == "old" for name in names)
+    assert renamed == names                                   # the record goes last
+    assert all((tmp_path / name).read_text() == "new" for name in names)
+    assert sorted(p.name for p in tmp_path.iterdir()) == names
 
 
 def test_missing_and_unreadable_files_are_input_errors(tmp_path):

@@ -61,7 +61,22 @@ def test_panel_draws_every_setting_and_button(blender, fog):
     log += draw(blender, ui.RENDER_PT_xsl_render, context, "draw_header_preset")
     log += draw(blender, ui.RENDER_PT_xsl_render_animation, context, "draw_header")
     drawn = {entry[2] for entry in log if entry[0] == "prop"}
-    assert set(SETTING_NAMES) | {"use_animation", "filepath"} <= drawn
+    assert "director" in drawn and not {"time_budget", "importance"} & drawn
+    render = next(entry[2] for entry in log if entry[1] == "xsl.render_selective")
+    assert render.text == "Selective Render"
+    # The Time Budget sampler: its budget and importance instead of the director map, Max
+    # Samples as the guided ceiling, the button says what it does.
+    fog.xsl_render.sampler = "BUDGET"
+    budget_log = []
+    for cls in ui.CLASSES:
+        budget_log += draw(blender, cls, context)
+    fog.xsl_render.sampler = "DIRECTOR"
+    budget_drawn = {entry[2] for entry in budget_log if entry[0] == "prop"}
+    assert {"time_budget", "importance"} <= budget_drawn and "director" not in budget_drawn
+    assert ("prop", fog.xsl_render, "max_spp", "Max Samples (ceiling)") in budget_log
+    render = next(entry[2] for entry in budget_log if entry[1] == "xsl.render_selective")
+    assert render.text == "Guided Render"
+    assert set(SETTING_NAMES) | {"use_animation", "filepath"} <= drawn | budget_drawn
     buttons = [entry[1] for entry in log if entry[0] == "operator"]
     assert {f"xsl.{name}" for name in OPERATORS} <= set(buttons)
     presets = [entry[2].values["preset"] for entry in log if entry[1] == "xsl.apply_preset"]
@@ -224,16 +239,27 @@ def test_modal_run_steps_tile_by_tile_and_esc_restores(blender, fog):
     assert blender.context.window_manager.xsl_render_status.last_report == operator.reports[-1][1]
     assert settings_dump(fog) == before
 
-    blender.data.images["XSL Render"]["mean_spp"] = -1.0      # a cancelled run leaves it alone
-    operator, context, _ = modal_harness(blender, selective_job)
+    cancel_midway(blender, fog, before, "tile 2/", "XSL render")        # into the tile renders
+
+
+def cancel_midway(bpy, scene, before: dict, step: str, label: str) -> None:
+    """Run the panel's render modally until its message shows ``step``, then press ESC:
+    every setting comes back and the last result's image is left alone."""
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.operators import job_operator
+    from xsl_render.operators.jobs import selective_job
+
+    image = bpy.data.images["XSL Render"]
+    image["mean_spp"] = -1.0
+    operator, context, _ = modal_harness(bpy, selective_job)
     operator.invoke(context, None)
-    while "tile 2/" not in operator._runner.message:         # into the tile renders
-        assert operator.modal(context, timer) == {"PASS_THROUGH"}
-    assert settings_dump(fog) != before                        # the render borrows settings
+    while step not in operator._runner.message:
+        assert operator.modal(context, SimpleNamespace(type="TIMER", value="NOTHING")) == {"PASS_THROUGH"}
+    assert settings_dump(scene) != before                      # the render borrows settings
     assert operator.modal(context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"}
-    assert settings_dump(fog) == before
-    assert operator.reports[-1] == ("WARNING", "XSL render cancelled; the scene is as it was")
-    assert blender.data.images["XSL Render"]["mean_spp"] == -1.0
+    assert settings_dump(scene) == before
+    assert operator.reports[-1] == ("WARNING", f"{label} cancelled; the scene is as it was")
+    assert image["mean_spp"] == -1.0
     assert job_operator.running_label() is None and context.window_manager.timers == 0
 
 
@@ -287,3 +313,110 @@ def test_presets_follow_the_paper_and_defaults_come_back(blender, fog):
     settings.max_spp, settings.xs_op = 999, "MULTIPLY"
     assert blender.ops.xsl.reset_settings() == {"FINISHED"}
     assert {name: getattr(settings, name) for name in SETTING_NAMES} == pytest.approx(builtin_defaults())
+
+
+# -- the Time Budget sampler (the guided render) ---------------------------------------------
+
+GUIDED_W, GUIDED_H, BUDGET = 64, 36, 3.0
+
+
+@pytest.fixture
+def budget_fog(blender, addon):
+    scene = build_fog_scene(blender, GUIDED_W, GUIDED_H)
+    settings = scene.xsl_render
+    settings.sampler, settings.time_budget, settings.importance = "BUDGET", BUDGET, "XS"
+    settings.max_spp, settings.tile_size = 4096, 16          # a ceiling the budget never reaches
+    return scene
+
+
+def within_budget(stats: dict, budget: float = BUDGET) -> bool:
+    return stats["mode"] == "guided" and stats["time_budget_s"] == budget \
+        and 0.9 * budget <= stats["wall_s"] <= 1.1 * budget
+
+
+def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, budget_fog, tmp_path):
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.core.progress import run_steps
+    from xsl_render.operators.jobs import selective_job
+
+    borrowed_settings(budget_fog)
+    before = settings_dump(budget_fog)
+    job = selective_job(budget_fog)
+    assert job.label == "Guided render"
+    messages = []
+    result = run_steps(job.steps, lambda fraction, message: messages.append(message))
+    stats = result.outcome.stats
+    assert within_budget(stats), stats["phases_s"]
+    assert stats["guided"]["importance"] == "xs" and stats["phases_s"]["maps"] > 0.0
+    assert any(message.startswith("XS map: ") for message in messages)
+    assert stats["max_spp"] == 4096 and result.outcome.samples.max() > result.outcome.samples.min()
+    assert settings_dump(budget_fog) == before
+
+    # The operator shows it and writes the files of `xsl-render render --mode guided`.
+    out = tmp_path / "guided.exr"
+    assert blender.ops.xsl.render_selective(filepath=str(out)) == {"FINISHED"}
+    image = blender.data.images["XSL Render"]
+    assert image["mode"] == "guided" and 0.9 * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
+    assert out.is_file() and out.with_name("guided_spp.exr").is_file()
+    report = blender.context.window_manager.xsl_render_status.last_report
+    assert report.startswith(f"GUIDED {GUIDED_W}x{GUIDED_H}: mean ") and f"of a {BUDGET:g} s budget" in report
+    assert "error weighed by XS" in report
+    assert settings_dump(budget_fog) == before
+
+
+def test_guided_render_in_steps_keeps_its_budget_and_esc_restores(blender, budget_fog):
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.operators import job_operator
+    from xsl_render.operators.jobs import selective_job
+
+    budget_fog.xsl_render.importance = "X"
+    borrowed_settings(budget_fog)
+    before = settings_dump(budget_fog)
+    timer = SimpleNamespace(type="TIMER", value="NOTHING")
+    operator, context, _ = modal_harness(blender, selective_job)
+    assert operator.invoke(context, None) == {"RUNNING_MODAL"}
+    assert job_operator.running_label() == "Guided render"
+    ticks, answer = 0, {"PASS_THROUGH"}
+    while answer == {"PASS_THROUGH"}:
+        answer = operator.modal(context, timer)
+        ticks += 1
+    assert answer == {"FINISHED"}, operator.reports
+    image = blender.data.images["XSL Render"]
+    assert image["mode"] == "guided" and 0.9 * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
+    assert ticks >= image["renders"] + 3               # map, sync, pilot, scoring, each rectangle
+    assert settings_dump(budget_fog) == before
+    cancel_midway(blender, budget_fog, before, "rectangle 2/", "Guided render")   # into the final pass
+
+
+def test_guided_animation_gives_every_frame_its_own_budget(blender, budget_fog, tmp_path):
+    import OpenImageIO as oiio
+
+    from xsl_render.core.progress import run_steps
+    from xsl_render.operators.jobs import selective_job
+
+    budget = 2.0
+    budget_fog.xsl_render.time_budget, budget_fog.xsl_render.importance = budget, "NONE"
+    budget_fog.frame_start, budget_fog.frame_end = 1, 2
+    job = selective_job(budget_fog, animation=True, filepath=str(tmp_path / "f_####.exr"))
+    done = run_steps(job.steps)
+    assert [entry["frame"] for entry in done] == [1, 2]
+    for entry in done:
+        assert entry["time_budget_s"] == budget and 0.9 * budget <= entry["wall_s"] <= 1.1 * budget, entry
+        assert oiio.ImageBuf(entry["path"]).spec().getattribute("xsl_render:mode") == "guided"
+    assert job.finish(done).report.startswith("Guided render: 2 frame(s) 1..2")
+
+
+def test_bad_time_budgets_are_refused_before_any_render(blender, budget_fog, capfd):
+    settings = budget_fog.xsl_render
+    settings.time_budget = 0.0
+    assert settings.time_budget == pytest.approx(0.1)         # the field's own floor
+    # Values that reach the settings past the field (a script writing the stored value, an
+    # old file): refused with one line, nothing rendered.
+    for value, message in ((0.0, "--time-budget must be a positive number of seconds"),
+                           (-2.0, "--time-budget must be a positive number of seconds"),
+                           (float("nan"), "--time-budget must be a positive number of seconds"),
+                           (1e9, "is more than a week")):
+        settings["time_budget"] = value
+        assert message in poll_message(blender, "render_selective"), value
+    assert "XSL Render" not in blender.data.images
+    assert "Traceback" not in capfd.readouterr().err

@@ -13,25 +13,22 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES, xsl_render_cli
-from fog_scene import build_fog_scene
+from fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 W, H = 64, 36
-ALL = ("gold", "x_only", "s_only", "xs", "xsl", "xsl_no_minbound", "uniform_equal_time",
-       "adaptive_equal_time")
-TINY = ("--max-spp", "4", "--tile-size", "16", "--no-vdp", "--quiet")
+ALL = ("gold", "x_only", "s_only", "xs", "xsl", "xsl_no_minbound", "uniform_eighth", "uniform_quarter",
+       "uniform_half", "uniform_equal_time", "adaptive_equal_time")
+#: A small converged reference keeps the tests quick (the default is 1024 spp).
+REFERENCE = ("--reference-spp", "64")
+TINY = ("--max-spp", "4", "--tile-size", "16", "--no-vdp", "--quiet") + REFERENCE
 
 
 @pytest.fixture(scope="module")
 def fog_blend(tmp_path_factory):
-    import bpy
-
-    path = tmp_path_factory.mktemp("scene") / "fog.blend"
-    build_fog_scene(bpy, W, H)
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
+    return saved_fog_scene(tmp_path_factory.mktemp("scene"), W, H)
 
 
 @pytest.fixture(scope="module")
@@ -53,12 +50,25 @@ def test_results_hold_every_mode_and_metric(experiment):
     data = results(out)
     runs = data["scenes"]["fog"]["runs"]
     assert tuple(runs) == ALL
-    assert data["rendered"] == 2 + len(ALL)              # two map sets (MinBound on, off) + renders
+    reference = data["scenes"]["fog"]["reference"]
+    assert reference["inputs"]["spp"] == 64 and reference["inputs"]["seed"] == 7
+    assert reference["source"] == "rendered" and Path(reference["path"]).is_file()
+    # Two map sets (MinBound on, off), the renders and the converged reference.
+    assert data["rendered"] == 2 + len(ALL) + 1
     gold = runs["gold"]
     assert gold["stats"]["mean_spp"] == 4 and gold["maps_s"] == 0
     for name, run in runs.items():
         assert run["time_s"] > 0 and not run["reused"]
         assert (out / run["files"]["image"]).is_file() and (out / run["files"]["spp_png"]).is_file()
+        against_reference = run["reference_metrics"]
+        assert against_reference["flip"]["mean_flip"] > 0 and against_reference["mse"]["skipped"] is None
+        assert (out / run["reference_heatmaps"]["flip"]).is_file()
+        if run["kind"] in ("gold", "uniform"):
+            assert run["equal_quality"] is None                        # on the uniform curve
+        else:
+            assert set(run["equal_quality"]) == {"flip", "mse", "jod"}
+            flip = run["equal_quality"]["flip"]
+            assert flip["value"] is not None and flip["faster"] == (flip["value"] > 1)
         if name == "gold":
             continue
         assert run["speedup_over_gold"] == pytest.approx(gold["time_s"] / run["time_s"])
@@ -74,6 +84,8 @@ def test_results_hold_every_mode_and_metric(experiment):
         assert 0 < runs[name]["maps_s"] < runs[name]["time_s"]          # Fig. 8: maps included
         assert runs[name]["stats"]["mean_spp"] < 4                      # selective: fewer samples
     assert runs["x_only"]["maps_s"] < runs["xsl"]["maps_s"]             # X alone needs less
+    assert [runs[n]["stats"]["mean_spp"] for n in ("uniform_eighth", "uniform_quarter", "uniform_half")] \
+        == [1, 1, 2]                                                   # 1/8, 1/4, 1/2 of 4, at least 1
     xsl = runs["xsl"]
     assert xsl["stats"]["phases_s"]["denoise"] > 0
     for name in ("uniform_equal_time", "adaptive_equal_time"):
@@ -83,7 +95,9 @@ def test_results_hold_every_mode_and_metric(experiment):
         assert runs[name]["stats"]["phases_s"]["denoise"] > 0
     assert data["scenes"]["fog"]["maps"]["no_minbound"]["minbound"] is False
     lines = result.stdout.strip().splitlines()
-    assert lines[0].startswith("fog: gold ") and "mean FLIP" in lines[0]
+    assert lines[0].startswith("fog (64x36, ceiling 4 spp) against a converged reference of 64 spp, seed 7")
+    assert "equal quality vs uniform" in lines[1]
+    assert not any("faster than gold" in line for line in lines)
     assert lines[-1] == f"report: {(out / 'report.html').resolve()}"
 
 
@@ -94,7 +108,7 @@ def test_rerun_reuses_every_finished_step(experiment, fog_blend):
                             "--minbound-scenes", "fog", *TINY)
     assert result.returncode == 0, result.stderr
     data = results(out)
-    assert data["rendered"] == 0 and data["reused"] == 2 + len(ALL)
+    assert data["rendered"] == 0 and data["reused"] == 2 + len(ALL) + 1     # the reference too
     assert all(run["reused"] for run in data["scenes"]["fog"]["runs"].values())
     assert {p: p.stat().st_mtime_ns for p in out.glob("fog/*.exr")} == before
     assert "0 step(s) computed" in result.stdout
@@ -113,10 +127,10 @@ def test_other_ceiling_renders_again_but_keeps_the_maps(experiment, fog_blend, t
     copy = tmp_path / "copy"
     shutil.copytree(out, copy)
     result = xsl_render_cli("experiment", "--scenes", fog_blend, "--out", copy, "--variants", "xs",
-                            "--max-spp", "5", "--tile-size", "16", "--no-vdp", "--quiet")
+                            "--max-spp", "5", "--tile-size", "16", "--no-vdp", "--quiet", *REFERENCE)
     assert result.returncode == 0, result.stderr
     data = results(copy)
-    assert (data["rendered"], data["reused"]) == (2, 1)        # gold and xs again; maps reused
+    assert (data["rendered"], data["reused"]) == (2, 2)        # gold and xs again; maps, reference reused
     assert data["scenes"]["fog"]["runs"]["gold"]["stats"]["mean_spp"] == 5
 
 
@@ -125,7 +139,7 @@ def test_a_killed_run_continues(fog_blend, tmp_path):
     out = tmp_path / "out"
     exe = Path(sys.executable).with_name("xsl-render")
     args = [str(exe), "experiment", "--scenes", str(fog_blend), "--out", str(out), "--max-spp", "64",
-            "--tile-size", "16", "--no-vdp", "--quiet", "--variants", "xs,xsl"]
+            "--tile-size", "16", "--no-vdp", "--quiet", "--variants", "xs,xsl", *REFERENCE]
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     while not (out / "fog" / "gold.json").exists() and process.poll() is None and time.monotonic() < deadline:
@@ -145,15 +159,21 @@ def test_a_killed_run_continues(fog_blend, tmp_path):
 def test_demo_end_to_end(tmp_path):
     assert (EXAMPLES / "road.blend").is_file()              # committed with its build script
     out = tmp_path / "demo"
-    result = xsl_render_cli("demo", "--out", out, "--resolution", "64x36", "--max-spp", "4", "--no-vdp")
+    result = xsl_render_cli("demo", "--out", out, "--resolution", "64x36", "--max-spp", "4", "--no-vdp",
+                            *REFERENCE)
     assert result.returncode == 0, result.stderr
     assert "demo [" in result.stderr and "ETA" in result.stderr          # the progress bar
     last = result.stdout.strip().splitlines()[-1]
     assert last == f"report: {(out / 'report.html').resolve()}"
     assert (out / "report.html").stat().st_size > 10_000
     runs = results(out)["scenes"]["road"]["runs"]
-    assert tuple(runs) == ("gold", "xs", "xsl", "uniform_equal_time", "adaptive_equal_time")
+    assert tuple(runs) == ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uniform_half",
+                           "uniform_equal_time", "adaptive_equal_time")
     assert runs["xsl"]["metrics"]["flip"]["mean_flip"] > 0
+    assert runs["xsl"]["reference_metrics"]["flip"]["mean_flip"] > 0
+    assert runs["xsl"]["equal_quality"]["flip"]["value"] is not None
+    # The demo prints equal-quality speedups over uniform, never a time ratio to gold.
+    assert "equal quality vs uniform" in result.stdout and "faster than gold" not in result.stdout
     assert results(out)["scenes"]["road"]["maps"]["minbound"]["lights"]["drawn"]   # lamps in the L map
 
 
@@ -165,6 +185,8 @@ def test_demo_end_to_end(tmp_path):
     (("experiment", "--size", "2"), "argument --size: must be a whole number from 8 to 16384"),
     (("experiment", "--resolution", "12by4"), "argument --resolution: must look like"),
     (("experiment", "--resolution", "64x36", "--size", "64"), "not both"),
+    (("experiment", "--seed", "7"), "contestant seed 7 is the converged reference's seed"),
+    (("experiment", "--reference-spp", "0"), "--reference-spp must be at least 1"),
     (("demo", "--scene", "README.md"), "not a .blend file"),
 ])
 def test_bad_input_is_one_line(args, message):

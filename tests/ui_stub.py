@@ -10,12 +10,13 @@ from types import SimpleNamespace
 class OperatorCall:
     """What ``layout.operator()`` returns: assignments must be the operator's properties."""
 
-    def __init__(self, bpy, idname: str, log: list):
+    def __init__(self, bpy, idname: str, log: list, text: str | None = None):
         category, name = idname.split(".")
         operator = getattr(getattr(bpy.ops, category), name)
         rna = operator.get_rna_type()                       # raises for an unknown operator
         object.__setattr__(self, "_names", set(rna.properties.keys()))
         object.__setattr__(self, "idname", idname)
+        object.__setattr__(self, "text", text)              # the button's label, if given
         object.__setattr__(self, "values", {})
         log.append(("operator", idname, self))
 
@@ -55,11 +56,11 @@ class StubLayout:
         self._check("prop", kwargs)
         if name not in data.bl_rna.properties.keys():
             raise AttributeError(f"{data.bl_rna.identifier} has no property '{name}'")
-        self.log.append(("prop", data, name))
+        self.log.append(("prop", data, name) + ((kwargs["text"],) if "text" in kwargs else ()))
 
     def operator(self, idname: str, **kwargs) -> OperatorCall:
         self._check("operator", kwargs)
-        return OperatorCall(self._bpy, idname, self.log)
+        return OperatorCall(self._bpy, idname, self.log, kwargs.get("text"))
 
     def menu(self, idname: str, **kwargs) -> None:
         self._check("menu", kwargs)

@@ -18,7 +18,7 @@ from ...core.progress import Steps
 from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import EXACT_MARGIN, RenderOptions
 from ..scene.state import preserved_scene
-from .selective_render import RenderOutcome, _stats, _tile_entry, finish_image, prepare_render
+from .selective_render import RenderOutcome, render_stats, tile_entry, finish_image, prepare_render
 from .tile_render import CyclesWindowRenderer
 
 #: Pixel-samples per band: a few seconds of fog on two CPU cores, so ESC answers quickly.
@@ -55,11 +55,11 @@ def gold_band_steps(scene, options: RenderOptions, budget: int = BAND_PIXEL_SAMP
                 compositor.add(band, crop(rendered.pixels, window, band), options.max_spp)
                 if guides is not None:
                     guides.add(band, crop(rendered.guides, window, band), options.max_spp)
-                tiles.append(_tile_entry(band, rendered) | {"window": list(window)})
+                tiles.append(tile_entry(band, rendered) | {"window": list(window)})
         phases = {"maps": 0.0, "renders": time.perf_counter() - started - waited}
         image, samples = compositor.result()
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
-        stats = _stats("gold", scene, options, width, height, samples, phases, tiles, warnings)
+        stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings)
     stats["bands"] = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,
                       "note": "bit-identical to one full-frame render; the wall time includes "
                               "the margin rows"}

@@ -29,6 +29,11 @@ import numpy as np
 from .render import read_exr_parts
 
 _SCENE = "xsl_render denoise"
+#: The denoising procedure's version: part of the converged reference's cache key
+#: (``core.validation.reference``). Bump it with any change to what ``denoise`` does
+#: (settings, prefilter, guides), then regenerate the shipped reference
+#: (tools/regenerate_reference.py); a test compares the shipped entry's key.
+DENOISE_VERSION = "oidn-hdr-fast-prefilter-1"
 
 
 def _image(bpy, name: str, pixels: np.ndarray, non_color: bool):

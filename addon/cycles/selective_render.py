@@ -68,7 +68,7 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     return width, height, warnings
 
 
-def _stats(mode: str, scene, options: RenderOptions, width: int, height: int,
+def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
            samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str]) -> dict:
     total = float(samples.sum(dtype=np.float64))
     return {
@@ -89,7 +89,7 @@ def _stats(mode: str, scene, options: RenderOptions, width: int, height: int,
     }
 
 
-def _tile_entry(window, rendered) -> dict:
+def tile_entry(window, rendered) -> dict:
     row0, row1, col0, col1 = window
     return {"row0": row0, "row1": row1, "col0": col0, "col1": col1,
             "spp": rendered.samples_set, "samples_rendered": rendered.samples_rendered,
@@ -186,7 +186,7 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
                 if guides is not None:
                     guides.add(rect.window, piece.guides, piece.samples)
                 composite_s += time.perf_counter() - placed
-                tiles.append(_tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
+                tiles.append(tile_entry(rect.window, piece.rendered) | {"window": list(piece.window)})
                 paused = time.perf_counter()
                 yield tracker.finish()
                 waited += time.perf_counter() - paused
@@ -197,7 +197,7 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
-        stats = _stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
+        stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
     stats["plan"] = plan.to_dict()
     stats["ideal_speedup"] = plan.ideal_speedup
     stats["director_map_mean"] = float(data.mean())
@@ -234,12 +234,12 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                     report.note(done / max(1, total), f"{mode}: sample {done}/{total}")
             rendered = renderer.render(None, samples, adaptive_threshold=adaptive_threshold,
                                        time_limit=time_limit, on_sample=on_sample)
-            tiles.append(_tile_entry((0, height, 0, width), rendered))
+            tiles.append(tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
         image = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
-        stats = _stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
+        stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
     stats.update(extra or {})
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not
@@ -271,11 +271,13 @@ def render_uniform(scene, options: RenderOptions, spp: int | None = None, second
                           extra={"budget": "time"})
 
 
-def render_adaptive(scene, options: RenderOptions, seconds: float,
+def render_adaptive(scene, options: RenderOptions, seconds: float | None,
                     noise_threshold: float = CYCLES_DEFAULT_NOISE_THRESHOLD,
                     progress: ProgressCallback | None = None) -> RenderOutcome:
     """Cycles' adaptive sampling with ``max_spp`` as the ceiling, stopped at ``seconds`` of wall
     time by Cycles' time limit (it may finish sooner if every pixel reaches the threshold).
+    ``seconds`` None: no time limit, Cycles stops where every pixel reaches the threshold
+    or at the ceiling (a point of the adaptive time-quality curve, ``xsl-render curves``).
 
     Why the time limit and not a tuned threshold: the threshold that makes Cycles finish in
     exactly ``seconds`` can only be found by trial renders, which cost more than the budget;
@@ -284,10 +286,11 @@ def render_adaptive(scene, options: RenderOptions, seconds: float,
     is paid inside the budget. The threshold is Cycles' default unless given: what an artist
     who switches on adaptive sampling and a time limit gets.
     """
-    if not seconds > 0:
+    if seconds is not None and not seconds > 0:
         raise InputError(f"the time budget must be positive (got {seconds})")
     if not noise_threshold > 0:
         raise InputError(f"--noise-threshold must be positive (got {noise_threshold})")
     return _single_render(scene, options, "adaptive", progress, options.max_spp, time_budget=seconds,
                           adaptive_threshold=noise_threshold,
-                          extra={"budget": "time", "noise_threshold": noise_threshold})
+                          extra={"budget": "samples" if seconds is None else "time",
+                                 "noise_threshold": noise_threshold})

@@ -22,6 +22,10 @@ Cycles reads at every render too and which changes from one rectangle to the nex
 time limit when the sample count changes with it (a new count resets Cycles' session, which
 reads the limit again); the count Cycles reports in the EXR header is checked against the
 one asked for.
+
+The whole frame may also be rendered at a fraction of its resolution (``reduce``: a cheap
+preview of where the image has detail); the resolution changes for that render only and is
+set back after it, and Cycles keeps the synced scene through it (no re-sync on balls_b).
 """
 from __future__ import annotations
 
@@ -131,6 +135,20 @@ class CyclesWindowRenderer:
                 self._on_sample(done, total)
 
     # -- rendering -------------------------------------------------------------------------
+    def _render_reduced(self, reduce: int, samples: int, adaptive_threshold, time_limit,
+                        on_sample) -> RenderedWindow:
+        if reduce < 1:
+            raise ValueError(f"reduce must be at least 1 (got {reduce})")
+        render = self.scene.render
+        resolution, full = (render.resolution_x, render.resolution_y), (self.width, self.height)
+        render.resolution_x, render.resolution_y = (max(1, side // reduce) for side in resolution)
+        try:
+            self.width, self.height = render_size(self.scene)
+            return self.render(None, samples, adaptive_threshold, time_limit, on_sample)
+        finally:
+            render.resolution_x, render.resolution_y = resolution
+            self.width, self.height = full
+
     @staticmethod
     def _assign(struct, name: str, value) -> bool:
         """Set a property only when it changes (every assignment makes Cycles re-check that
@@ -151,15 +169,19 @@ class CyclesWindowRenderer:
 
     def render(self, window: tuple[int, int, int, int] | None, samples: int,
                adaptive_threshold: float | None = None, time_limit: float = 0.0,
-               on_sample: Callable[[int, int], None] | None = None) -> RenderedWindow:
+               on_sample: Callable[[int, int], None] | None = None,
+               reduce: int = 1) -> RenderedWindow:
         """Render ``window`` (row0, row1, col0, col1; rows from the top) or the whole frame.
 
         ``samples`` is Cycles' sample count (the ceiling when ``adaptive_threshold`` or
         ``time_limit`` may stop it earlier; then the returned ``samples`` holds Cycles' own
         count per pixel). ``on_sample(done, total)`` is called as Cycles reports progress.
+        ``reduce`` > 1 renders the whole frame at 1/reduce of its resolution (window None).
         """
         import bpy
 
+        if reduce != 1:
+            return self._render_reduced(reduce, samples, adaptive_threshold, time_limit, on_sample)
         scene, cycles, render = self.scene, self.scene.cycles, self.scene.render
         counted = adaptive_threshold is not None or time_limit > 0.0
         multilayer = counted or self.guides

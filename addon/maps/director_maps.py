@@ -121,6 +121,32 @@ def map_steps(scene, options: MapOptions | None = None, size: tuple[int, int] | 
     return MapSet(z=xres.z, x=xres.x, snapshot=snapshot.combined, s=s, l=l_map, xs=xs, xsl=xsl, info=info)
 
 
+def named_map(scene, name: str, options: MapOptions | None = None,
+              size: tuple[int, int] | None = None, cache_dir=None) -> np.ndarray:
+    """One director map, "x", "xs" or "xsl", at ``size`` (the render size if None), computing
+    no more than it needs: X alone costs a fraction of the snapshot that S and L need."""
+    return run_steps(named_map_steps(scene, name, options, size, cache_dir))
+
+
+def named_map_steps(scene, name: str, options: MapOptions | None = None,
+                    size: tuple[int, int] | None = None, cache_dir=None) -> Steps[np.ndarray]:
+    """``named_map`` as steps (``core.progress``); ``cache_dir`` keeps the camera rays for
+    the next frame, as ``map_steps`` does."""
+    if name not in ("x", "xs", "xsl"):
+        raise ValueError(f"no director map named {name!r}")
+    options = (options or MapOptions()).validate()
+    if name != "x":
+        maps = yield from map_steps(scene, options, size=size, cache_dir=cache_dir)
+        return maps.director(name)
+    yield 0.0, "X map and Z buffer"
+    with preserved_scene(scene):
+        if size is not None:
+            scene.render.resolution_x, scene.render.resolution_y = size
+            scene.render.resolution_percentage = 100
+        x = compute_x_map_detailed(scene, cache_dir=cache_dir, minbound=options.minbound).x
+    return np.asarray(x, np.float32)
+
+
 def light_transmittance(camera: CameraModel, xres: XMapResult) -> Callable[[np.ndarray], np.ndarray]:
     """exp(-tau) from the eye to world points, along the camera ray through each point's pixel."""
     rays = xres.rays

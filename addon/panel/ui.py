@@ -1,8 +1,10 @@
 """The artist panel: Properties > Render > XSL Selective Rendering (Cycles only).
 
 Buttons run ``bpy.ops.xsl.compute_maps / render_selective / render_gold / compare`` (modal,
-ESC cancels; see ``operators/job_operator.py``); the sub-panels hold the paper's map options
-and the sampling of ``scene.xsl_render``; the header's menu applies the fog presets.
+ESC cancels; see ``operators/job_operator.py``); the sampler is the paper's director map or
+the guided render within a time budget ("Guided Render"); the sub-panels hold the paper's
+map options and the sampling of ``scene.xsl_render``; the header's menu applies the fog
+presets.
 """
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ import textwrap
 
 import bpy
 
-from ...core.panel.settings import PRESETS
+from ...core.panel.settings import PRESETS, uses_budget
 
 
 class XSL_MT_presets(bpy.types.Menu):
@@ -25,6 +27,11 @@ class XSL_MT_presets(bpy.types.Menu):
             layout.operator("xsl.apply_preset", text=preset.label).preset = key
         layout.separator()
         layout.operator("xsl.reset_settings", icon="PREFERENCES")
+
+
+def _map_in_use(settings) -> str:
+    """The director map the next render uses: the sampler's, or the guided importance."""
+    return settings.importance if uses_budget(settings) else settings.director
 
 
 class _XSLPanel:
@@ -50,13 +57,20 @@ class RENDER_PT_xsl_render(_XSLPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         settings = context.scene.xsl_render
-        layout.prop(settings, "director", expand=True)
+        layout.prop(settings, "sampler", expand=True)
+        budget = uses_budget(settings)
+        if budget:
+            layout.prop(settings, "time_budget")
+            layout.prop(settings, "importance")
+        else:
+            layout.prop(settings, "director", expand=True)
 
         column = layout.column(align=True)
         column.operator("xsl.compute_maps", icon="IMAGE_DATA")
         row = column.row(align=True)
         animation = settings.use_animation
-        for idname, text in (("xsl.render_selective", "Selective Render"), ("xsl.render_gold", "Gold Render")):
+        selective = "Guided Render" if budget else "Selective Render"
+        for idname, text in (("xsl.render_selective", selective), ("xsl.render_gold", "Gold Render")):
             op = row.operator(idname, text=text + (" (Frames)" if animation else ""),
                               icon="RENDER_ANIMATION" if animation else "RENDER_STILL")
             op.animation = animation
@@ -90,7 +104,7 @@ class RENDER_PT_xsl_render_maps(_XSLPanel, bpy.types.Panel):
         column.prop(settings, "ws")
         column.prop(settings, "xs_op")
         column = layout.column(heading="XSL")
-        column.active = settings.director == "XSL"
+        column.active = _map_in_use(settings) == "XSL"
         column.prop(settings, "wxs")
         column.prop(settings, "wl")
         column.prop(settings, "xsl_op")
@@ -106,7 +120,7 @@ class RENDER_PT_xsl_render_light(_XSLPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         settings = context.scene.xsl_render
-        layout.active = settings.director == "XSL"
+        layout.active = _map_in_use(settings) == "XSL"
         layout.prop(settings, "light_auto")
         column = layout.column()
         column.active = not settings.light_auto
@@ -124,8 +138,11 @@ class RENDER_PT_xsl_render_sampling(_XSLPanel, bpy.types.Panel):
         layout.use_property_decorate = False
         settings = context.scene.xsl_render
         column = layout.column(align=True)
-        column.prop(settings, "max_spp")
-        column.prop(settings, "min_spp")
+        # With the time budget, Max Samples is the guided render's per-pixel ceiling.
+        column.prop(settings, "max_spp", **({"text": "Max Samples (ceiling)"} if uses_budget(settings) else {}))
+        row = column.row(align=True)
+        row.active = not uses_budget(settings)
+        row.prop(settings, "min_spp")
         layout.prop(settings, "tile_size")
         layout.prop(settings, "denoise")
 

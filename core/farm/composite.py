@@ -11,11 +11,10 @@ import time
 from dataclasses import dataclass
 
 from ..errors import InputError
-from ..files import write_json
-from ..imageio import write_exr, write_png
 from ..sampling.composite import Compositor
-from .files import (RECORD_FORMAT, FrameFiles, file_sha256, json_digest, load_plan, read_record,
-                    read_tile, recorded_file_intact, remove_partial_files, valid_tile)
+from ..sampling.render_files import frame_attributes
+from .files import RECORD_FORMAT, FrameFiles, json_digest, load_plan, read_tile, valid_tile
+from .frame_outputs import FRAME_KIND, valid_frame_outputs, write_frame_outputs
 from .task_groups import group_plan
 
 
@@ -23,16 +22,6 @@ from .task_groups import group_plan
 class CompositeResult:
     stats: dict
     skipped: bool           # the outputs were already there and current
-
-
-def _valid_outputs(files: FrameFiles, inputs_digest: str) -> dict | None:
-    stats = read_record(files.stats)
-    if stats is None or stats.get("inputs") != inputs_digest:
-        return None
-    if not (recorded_file_intact(stats, "image_sha256", files.image)
-            and recorded_file_intact(stats, "spp_sha256", files.spp_image)):
-        return None
-    return stats
 
 
 def composite_frame(files: FrameFiles, groups: int | None = None,
@@ -59,7 +48,7 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
                          f"no finished render ({shown}); run the tile step first")
     inputs_digest = json_digest({"plan": record.data["inputs"],
                                  "tiles": [tile.get("pixels_sha256") for tile in tiles]})
-    previous = _valid_outputs(files, inputs_digest)
+    previous = valid_frame_outputs(files, inputs_digest)
     if previous is not None:
         return CompositeResult(previous, skipped=True)
 
@@ -82,18 +71,11 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
         image = denoiser(image, albedo_normal[..., :3], albedo_normal[..., 3:])
         denoise_seconds = time.perf_counter() - tick
     mode = record.mode
-    attributes = {"xsl_render:mode": mode, "xsl_render:max_spp": options.max_spp,
-                  "xsl_render:seed": options.seed,
-                  "xsl_render:mean_spp": float(samples.mean(dtype="float64"))}
-    for path in (files.image, files.spp_image, files.spp_preview, files.stats):
-        remove_partial_files(path)
-    write_exr(files.image, image, ["R", "G", "B", "A"], attributes=attributes)
-    write_exr(files.spp_image, samples, ["Y"], attributes=attributes)
-    write_png(files.spp_preview, samples / float(options.max_spp))
+    attributes = frame_attributes(mode, options.max_spp, options.seed, samples.mean(dtype="float64"))
     total = float(samples.sum(dtype="float64"))
     render_seconds = sum(float(tile.get("seconds", 0.0)) for tile in tiles)
     stats = {
-        "format": RECORD_FORMAT, "kind": "xsl-render farm frame",
+        "format": RECORD_FORMAT, "kind": FRAME_KIND,
         "inputs": inputs_digest, "image_sha256": None, "spp_sha256": None,
         "mode": mode, "frame": files.frame, "scene": record.scene_name,
         "resolution": [plan.width, plan.height], "max_spp": options.max_spp, "seed": options.seed,
@@ -109,11 +91,8 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
         "options": options.to_dict(), "map_options": record.data["inputs_detail"]["map_options"],
         "out": str(files.image),
     }
-    stats["image_sha256"] = file_sha256(files.image)
-    stats["spp_sha256"] = file_sha256(files.spp_image)
     stats["phases_s"]["composite"] = time.perf_counter() - started
-    # The compute the frame cost across its tasks (what --budget-from compares against),
-    # not the elapsed time of the job, which depends on how many machines ran it.
-    stats["wall_s"] = sum(stats["phases_s"].values())
-    write_json(files.stats, stats)
+    # wall_s: the compute the frame cost across its tasks (what --budget-from compares
+    # against), not the elapsed time of the job, which depends on how many machines ran it.
+    write_frame_outputs(files, image, samples, options.max_spp, attributes, stats)
     return CompositeResult(stats, skipped=False)

@@ -9,15 +9,16 @@ skipped, and half-written, stale (other scene or settings) or damaged files are 
 
 Layout under the job's output folder (``frame`` zero-padded to four digits, as Blender does)::
 
-    frame_0001.exr            the final image (RGBA)             (composite step)
+    frame_0001.exr            the final image (RGBA)             (composite or guided step)
     frame_0001_spp.exr/.png   samples per pixel
-    frame_0001.json           statistics + the record of the composite
+    frame_0001.json           statistics + the frame's record (written as one set: frame_outputs)
     work/frame_0001/maps/     xsl-render maps output              (maps step)
     work/frame_0001/plan.json the tile plan + the record of the maps step
     work/frame_0001/tiles/r<row0>-<row1>_c<col0>-<col1>.exr/.json   one per rectangle (tile steps)
 
 A rectangle's record depends on its window and samples, not on the map it came from, so a
-new plan (other map weights) re-renders only the rectangles that changed.
+new plan (other map weights) re-renders only the rectangles that changed. A guided job has no
+work/ folder: one task renders the whole frame and writes its files directly.
 """
 from __future__ import annotations
 
@@ -138,6 +139,16 @@ def maps_inputs(scene_digest: str, scene_name: str, frame: int, mode: str, map_o
     """Everything the maps and the plan of a frame are made from."""
     return {"scene_sha256": scene_digest, "scene_name": scene_name, "frame": frame, "mode": mode,
             "map_options": map_options, "options": options.to_dict(), "blender": renderer_version()}
+
+
+def guided_inputs(scene_digest: str, scene_name: str, frame: int, guided: dict,
+                  map_options: dict | None, options: RenderOptions) -> dict:
+    """Everything a guided frame is rendered from: the time budget is one of them (a frame
+    rendered with another budget is another frame); the map options only when the
+    importance map uses them (``map_options`` None otherwise)."""
+    return {"scene_sha256": scene_digest, "scene_name": scene_name, "frame": frame, "mode": "guided",
+            "guided": guided, "map_options": map_options, "options": options.to_dict(),
+            "blender": renderer_version()}
 
 
 @dataclass

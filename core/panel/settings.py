@@ -1,9 +1,11 @@
 """The artist panel's settings as plain data: names, limits, defaults and the fog presets.
 
 ``addon/panel/properties.py`` turns ``SETTINGS`` into Blender properties (on every scene and in
-the extension's preferences, which hold the defaults); ``map_options`` / ``render_options``
-turn a scene's values into the options the command line builds from its arguments, so the
-panel, scripts and ``xsl-render`` run the same maps and renders.
+the extension's preferences, which hold the defaults); ``map_options`` / ``render_options`` /
+``guided_options`` turn a scene's values into the options the command line builds from its
+arguments, so the panel, scripts and ``xsl-render`` run the same maps and renders. The
+sampler is the paper's (a director map scales Max Samples) or the guided render within a
+time budget (``xsl-render render --mode guided``), with Max Samples as its ceiling.
 
 Presets follow section 4.4 of the paper: "a very thick medium will need a higher value for
 n and a medium-high value for sigma_base ... values of n between 4-8 work well for
@@ -18,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..maps.options import MapOptions
+from ..sampling.guided_plan import MAX_TIME_BUDGET, GuidedOptions
 from ..sampling.render_options import MIN_TILE_SIZE, RenderOptions
 
 #: Cycles' own ceiling for samples per pixel.
@@ -26,6 +29,17 @@ OPERATOR_ITEMS = (("ADD", "Add", "Weighted sum: every weighted feature is kept (
                   ("MULTIPLY", "Multiply", "Weighted product A^wa B^wb: one map modulates the other"))
 DIRECTOR_ITEMS = (("XSL", "XSL", "X, saliency and the light map (section 4.5): scenes with visible lights"),
                   ("XS", "XS", "X and saliency (section 4.3): enough without visible lights"))
+SAMPLER_ITEMS = (("DIRECTOR", "Director Map",
+                  "The paper: the XS or XSL map scales Max Samples per pixel"),
+                 ("BUDGET", "Time Budget",
+                  "Guided: a pilot pass over the frame, then the rest of the time budget where the "
+                  "denoised frame keeps its error (optionally weighted by a director map)"))
+IMPORTANCE_ITEMS = (("NONE", "None", "Weigh every tile's estimated error alike"),
+                    ("X", "X", "Weigh the error by the extinction (X) map: less where the medium hides"),
+                    ("XS", "XS", "Weigh the error by the XS map (extinction and saliency)"),
+                    ("XSL", "XSL", "Weigh the error by the XSL map (also the glow of lights)"))
+#: The sampler whose settings are the guided render's (``guided_options``).
+BUDGET_SAMPLER = "BUDGET"
 
 
 @dataclass(frozen=True)
@@ -45,8 +59,17 @@ class Setting:
 
 
 SETTINGS: tuple[Setting, ...] = (
+    Setting("sampler", "enum", "Sampler", "How the render spends its samples", "DIRECTOR",
+            items=SAMPLER_ITEMS),
     Setting("director", "enum", "Director Map",
             "Which combined map spends the samples", "XSL", items=DIRECTOR_ITEMS),
+    Setting("time_budget", "float", "Time Budget",
+            "Seconds for the whole guided render of a frame: importance map, scene sync, passes "
+            "and denoising (each frame of an animation gets its own)", 30.0,
+            min=0.1, max=MAX_TIME_BUDGET, soft_min=1.0, soft_max=600.0),
+    Setting("importance", "enum", "Importance",
+            "Director map that weighs the guided render's estimated error (computed inside the "
+            "budget)", "NONE", items=IMPORTANCE_ITEMS),
     Setting("wx", "float", "X Weight", "w_x: weight of the extinction (X) map in XS (section 4.3)",
             0.5, min=0.0, max=10.0, soft_max=1.0),
     Setting("ws", "float", "S Weight", "w_s: weight of the saliency (S) map in XS (section 4.3)",
@@ -72,10 +95,12 @@ SETTINGS: tuple[Setting, ...] = (
             "Give sky pixels the smallest X of the frame, so that fog in front of the sky is "
             "not starved of samples (section 4.1)", True),
     Setting("max_spp", "int", "Max Samples",
-            "Samples per pixel where the director map is 1 (the gold standard's count)", 64,
+            "Samples per pixel where the director map is 1 (the gold standard's count); with the "
+            "Time Budget sampler, the most samples any pixel may get (the guided ceiling)", 64,
             min=1, max=CYCLES_MAX_SAMPLES, soft_max=4096),
     Setting("min_spp", "int", "Min Samples",
-            "Samples every pixel gets at least, however low the director map", 1,
+            "Samples every pixel gets at least, however low the director map (Director Map "
+            "sampler only)", 1,
             min=1, max=CYCLES_MAX_SAMPLES, soft_max=64),
     Setting("tile_size", "int", "Tile Size",
             "Edge of the square tiles the render plan starts from (split down to 8 px where it pays)",
@@ -130,8 +155,25 @@ def map_options(settings) -> MapOptions:
         minbound=bool(settings.minbound)).validate()
 
 
+def uses_budget(settings) -> bool:
+    """True when the settings ask for the guided render within a time budget."""
+    return settings.sampler == BUDGET_SAMPLER
+
+
 def render_options(settings) -> RenderOptions:
     """The RenderOptions of a settings object (seed 0, whole tiles' maxima, as the command
-    line's defaults); InputError for an impossible combination (e.g. min above max)."""
-    return RenderOptions(max_spp=int(settings.max_spp), min_spp=int(settings.min_spp),
+    line's defaults); InputError for an impossible combination (e.g. min above max). Min
+    Samples only counts for the director-map sampler (the guided render has no floor)."""
+    min_spp = 1 if uses_budget(settings) else int(settings.min_spp)
+    return RenderOptions(max_spp=int(settings.max_spp), min_spp=min_spp,
                          tile_size=int(settings.tile_size), denoise=bool(settings.denoise)).check()
+
+
+def guided_options(settings) -> GuidedOptions:
+    """The GuidedOptions of a settings object: its time budget and importance map, Max
+    Samples as the per-pixel ceiling, its tile size, the command line's defaults for the
+    rest; InputError for an impossible value (a budget that is not a positive number of
+    seconds, or more than a week)."""
+    return GuidedOptions(time_budget=float(settings.time_budget), max_spp=int(settings.max_spp),
+                         importance=str(settings.importance).lower(),
+                         tile_size=int(settings.tile_size)).check()

@@ -28,6 +28,19 @@ def render_output_paths(out: str | Path, stats_path: str | Path | None = None) -
             "--stats": Path(stats_path) if stats_path else None}
 
 
+def frame_attributes(mode: str, max_spp: int, seed: int, mean_spp: float) -> dict:
+    """The EXR header attributes of a rendered frame and its samples image (the _spp.png's
+    white level as ``max_spp``)."""
+    return {"xsl_render:mode": mode, "xsl_render:max_spp": max_spp, "xsl_render:seed": seed,
+            "xsl_render:mean_spp": float(mean_spp)}
+
+
+def preview_scale(ceiling: int | None, samples: np.ndarray) -> int:
+    """The samples per pixel a _spp.png shows as white: the ceiling, or without one (a
+    guided render without --max-spp) the most any pixel got."""
+    return max(1, int(np.max(samples))) if ceiling is None else int(ceiling)
+
+
 def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: dict,
                          max_spp: int, seed: int, stats_path: str | Path | None = None) -> list[Path]:
     """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given),
@@ -37,8 +50,7 @@ def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray
     """
     out = Path(out)
     started = time.perf_counter()
-    attributes = {"xsl_render:mode": stats["mode"], "xsl_render:max_spp": max_spp,
-                  "xsl_render:seed": seed, "xsl_render:mean_spp": float(stats["mean_spp"])}
+    attributes = frame_attributes(stats["mode"], max_spp, seed, stats["mean_spp"])
     spp_exr, spp_png = spp_paths(out)
     with output_set():
         written = [write_exr(out, image, ["R", "G", "B", "A"], attributes=attributes),

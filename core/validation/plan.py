@@ -1,16 +1,20 @@
 """What the objective validation renders per scene (paper sections 5 and 6.1), and the
-equal-time baselines the paper does not have.
+baselines the paper does not have.
 
-Per scene, every image is compared with the gold standard (the ceiling of samples in every
-pixel). The paper's versions are the X map alone, XS(1, 0, +), the saliency map alone,
-XS(0, 1, +), the XS map and, for the road scene, the XSL map with and without MinBound.
-Ours add two renders that cost the same wall time as the XSL run (maps included): uniform
+Per scene, every image is compared with the converged reference (``core.validation.reference``:
+far more samples, a seed no run uses) and, as the paper does, with the gold standard (the
+ceiling of samples in every pixel, the runs' own seed). The paper's versions are the X map
+alone, XS(1, 0, +), the saliency map alone, XS(0, 1, +), the XS map and, for the road scene,
+the XSL map with and without MinBound. Ours add uniform sampling at 1/8, 1/4 and 1/2 of the
+ceiling (with the gold standard, a uniform time-quality curve to read equal-quality speedups
+along) and two renders that cost the same wall time as the XSL run (maps included): uniform
 sampling and Cycles' own adaptive sampling, what a Blender user would do instead.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..checks import name_list
 from ..errors import InputError
 from ..maps.options import MapOptions
 
@@ -30,6 +34,8 @@ class Variant:
     kind : "gold", "selective", "uniform" or "adaptive".
     director : for selective runs, "xs" or "xsl": which combination of the maps directs it.
     map_options : the weights and operators of that combination and whether X uses MinBound.
+    spp_fraction : for a uniform run with samples of its own, the fraction of the ceiling it
+        renders everywhere (None: a run at the XSL run's time).
     """
 
     name: str
@@ -37,14 +43,22 @@ class Variant:
     kind: str
     director: str | None = None
     map_options: MapOptions | None = None
+    spp_fraction: float | None = None
 
     @property
     def equal_time(self) -> bool:
-        return self.kind in ("uniform", "adaptive")
+        return self.kind in ("uniform", "adaptive") and self.spp_fraction is None
+
+    def spp(self, ceiling: int) -> int:
+        """Samples per pixel of a uniform run with ``spp_fraction`` (at least 1)."""
+        return max(1, round(ceiling * self.spp_fraction))
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "label": self.label, "kind": self.kind, "director": self.director,
+        data = {"name": self.name, "label": self.label, "kind": self.kind, "director": self.director,
                 "map_options": self.map_options.to_dict() if self.map_options else None}
+        if self.spp_fraction is not None:       # absent otherwise: older runs' hashes stay valid
+            data["spp_fraction"] = self.spp_fraction
+        return data
 
 
 _PAPER = MapOptions()
@@ -57,12 +71,18 @@ VARIANTS = {
         Variant("xsl", "XSL(0.5, 0.5, +)", "selective", "xsl", _PAPER),
         Variant("xsl_no_minbound", "XSL without MinBound", "selective", "xsl",
                 MapOptions(minbound=False)),
+        Variant("uniform_eighth", "Uniform, 1/8 of the ceiling", "uniform", spp_fraction=1 / 8),
+        Variant("uniform_quarter", "Uniform, 1/4 of the ceiling", "uniform", spp_fraction=1 / 4),
+        Variant("uniform_half", "Uniform, 1/2 of the ceiling", "uniform", spp_fraction=1 / 2),
         Variant("uniform_equal_time", "Uniform, XSL's time", "uniform"),
         Variant("adaptive_equal_time", "Cycles adaptive, XSL's time", "adaptive"),
     )
 }
 #: Every variant but the MinBound comparison, which only some scenes get.
-DEFAULT_VARIANTS = ("gold", "x_only", "s_only", "xs", "xsl", "uniform_equal_time", "adaptive_equal_time")
+DEFAULT_VARIANTS = ("gold", "x_only", "s_only", "xs", "xsl", "uniform_eighth", "uniform_quarter",
+                    "uniform_half", "uniform_equal_time", "adaptive_equal_time")
+#: The uniform runs with samples of their own: with gold, the uniform time-quality curve.
+UNIFORM_CURVE_VARIANTS = ("uniform_eighth", "uniform_quarter", "uniform_half")
 #: Scenes that also get XSL without MinBound (the paper's road scene, the one with sky).
 DEFAULT_MINBOUND_SCENES = ("road",)
 
@@ -72,11 +92,7 @@ def parse_variants(text: str | None) -> tuple[str, ...]:
     metric compares with it), and equal-time runs bring the XSL run they take their time from."""
     if text is None:
         return DEFAULT_VARIANTS
-    names = [name.strip() for name in text.split(",") if name.strip()]
-    unknown = [name for name in names if name not in VARIANTS]
-    if unknown or not names:
-        raise InputError(f"--variants: unknown variant '{unknown[0] if unknown else text}' "
-                         f"(choose from {', '.join(VARIANTS)})")
+    names = name_list(text, "--variants", VARIANTS, "variant")
     wanted = {GOLD, *names}
     if any(VARIANTS[name].equal_time for name in names):
         wanted.add(EQUAL_TIME_SOURCE)
@@ -149,13 +165,19 @@ class ValidationSettings:
     vdp: bool = True
     denoise: bool = True
     variants: tuple[str, ...] = DEFAULT_VARIANTS
+    reference_spp: int | None = None
 
     def render_options(self, max_spp: int | None = None):
-        """The RenderOptions of every render (``max_spp`` overrides the ceiling for one scene)."""
+        """The RenderOptions of every render (``max_spp`` overrides the ceiling for one scene).
+        InputError as well for a seed the converged reference uses, or its samples below 1."""
         from ..sampling.render_options import RenderOptions
+        from .reference import REFERENCE_SEED, check_contestant_seeds
 
         if self.longest_side is not None and not 8 <= self.longest_side <= 16384:
             raise InputError(f"--size must be between 8 and 16384 pixels (got {self.longest_side})")
+        if self.reference_spp is not None and self.reference_spp < 1:
+            raise InputError(f"--reference-spp must be at least 1 (got {self.reference_spp})")
+        check_contestant_seeds((self.seed,), REFERENCE_SEED)
         return RenderOptions(max_spp=max_spp or self.max_spp, min_spp=self.min_spp,
                              tile_size=self.tile_size, seed=self.seed,
                              resolution=self.resolution, denoise=self.denoise).check()
@@ -164,4 +186,5 @@ class ValidationSettings:
         return {"max_spp": self.max_spp, "resolution": list(self.resolution) if self.resolution else None,
                 "longest_side": self.longest_side,
                 "min_spp": self.min_spp, "tile_size": self.tile_size, "seed": self.seed,
-                "vdp": self.vdp, "denoise": self.denoise, "variants": list(self.variants)}
+                "vdp": self.vdp, "denoise": self.denoise, "variants": list(self.variants),
+                "reference_spp": self.reference_spp}

@@ -53,6 +53,7 @@ def write_record(path: str | os.PathLike, record: dict) -> Path:
     return write_json(path, record)
 
 
-def check_output_folder(folder: str | os.PathLike) -> Path:
-    """InputError (one line) unless ``folder`` is, or can become, a writable folder."""
-    return writable_folder(folder, name="--out")
+def check_output_folder(folder: str | os.PathLike, label: str = "--out") -> Path:
+    """InputError (one line) unless ``folder`` is, or can become, a writable folder
+    (``label`` names it in the message)."""
+    return writable_folder(folder, name=label)

@@ -8,6 +8,7 @@ import warnings
 from contextlib import contextmanager
 
 from ...core.checks import MAX_SIDE
+from ...core.errors import InputError
 from ...core.maps.options import MAX_N, MAX_SIGMA_BASE, MapOptions
 from ...core.sampling.render_options import MIN_TILE_SIZE
 from . import argtypes
@@ -91,12 +92,67 @@ def add_tile_arguments(parser) -> None:
                              "and normal, the same in every mode (default on)")
 
 
-def render_options_from_args(args):
-    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked."""
+def add_guided_arguments(parser, budget_required: bool = False) -> None:
+    """The options of ``--mode guided`` (``core.sampling.guided_plan.GuidedOptions``);
+    ``budget_required`` where there is no other mode."""
+    from ...core.sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET, GuidedOptions
+
+    # The ranges of GuidedOptions.check, here so that a bad value ends the command while it is
+    # parsed (one line, before Blender loads) whatever the mode.
+    defaults = GuidedOptions(time_budget=1.0)
+    guided = parser.add_argument_group("guided")
+    guided.add_argument("--time-budget", type=argtypes.number(above=0.0, hi=MAX_TIME_BUDGET), metavar="SECONDS",
+                        required=budget_required,
+                        help="guided: seconds for the whole render (maps, passes, denoising)")
+    guided.add_argument("--importance", choices=IMPORTANCE_MAPS, default=defaults.importance,
+                        help="guided: director map that weighs the estimated error (default none)")
+    guided.add_argument("--pilot-fraction", type=argtypes.number(above=0.0, hi=1.0),
+                        default=defaults.pilot_fraction,
+                        help=f"guided: share of the budget for the pilot pass (default {defaults.pilot_fraction})")
+    guided.add_argument("--guided-exponent", type=argtypes.number(0.0, 2.0), default=defaults.exponent,
+                        help="guided: samples go as (score x importance) to this power; 0 is "
+                             f"uniform (default {defaults.exponent})")
+    guided.add_argument("--level-ratio", type=argtypes.number(above=1.0, hi=4.0), default=defaults.level_ratio,
+                        help="guided: sample counts are rounded to powers of this ratio "
+                             f"(default {defaults.level_ratio})")
+
+
+def guided_options_from_args(args):
+    """``GuidedOptions`` from the guided arguments, --max-spp and --tile-size, checked."""
+    from ...core.sampling.guided_plan import GuidedOptions
+
+    if args.time_budget is None:
+        raise InputError("--mode guided needs --time-budget SECONDS")
+    return GuidedOptions(time_budget=args.time_budget, max_spp=args.max_spp,
+                         pilot_fraction=args.pilot_fraction, exponent=args.guided_exponent,
+                         importance=args.importance, tile_size=args.tile_size,
+                         level_ratio=args.level_ratio).check()
+
+
+def guided_render_options(guided, seed: int, resolution):
+    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm): its
+    ceiling as max_spp (what the statistics report), its tile size, the seed and resolution."""
     from ...core.sampling.render_options import RenderOptions
 
+    return RenderOptions(max_spp=guided.ceiling, tile_size=guided.tile_size, seed=seed,
+                         resolution=resolution).check()
+
+
+def render_options_from_args(args):
+    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked.
+
+    Every mode but guided needs --max-spp; guided without it has no ceiling but
+    ``UNBOUNDED_SPP``."""
+    from ...core.sampling.guided_plan import UNBOUNDED_SPP
+    from ...core.sampling.render_options import RenderOptions
+
+    max_spp, mode = args.max_spp, getattr(args, "mode", None)
+    if max_spp is None:
+        if mode != "guided":
+            raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
+        max_spp = UNBOUNDED_SPP
     return RenderOptions(
-        max_spp=args.max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
         resolution=parse_resolution(args.resolution), denoise=args.denoise).check()

@@ -1,5 +1,7 @@
 """``xsl-render experiment``: the paper's objective validation (Fig. 8, Tables I and II) on the
-example scenes, with FLIP and equal-time baselines, into DIR/results.json and DIR/report.html.
+example scenes, with FLIP, equal-time baselines and a uniform curve, every run measured against
+the converged reference (cached, ``xsl-render reference``) as well as, the paper's measure,
+against the gold standard, into DIR/results.json and DIR/report.html.
 
 Resumable: every finished map set, render and comparison is kept with the hash of its inputs
 and reused, so rerunning after Ctrl-C (or a crash) continues where it stopped.
@@ -12,8 +14,9 @@ from pathlib import Path
 NAME = "experiment"
 #: Finished steps are kept as they come (the run resumes), not held back for the end.
 OUTPUTS_AS_A_SET = False
-HELP = ("render gold, X-only, S-only, XS, XSL and equal-time baselines of the example scenes, "
-        "measure time, MSE, VDP and FLIP, and write results.json and an HTML report (resumable)")
+HELP = ("render gold, X-only, S-only, XS, XSL, uniform and equal-time baselines of the example "
+        "scenes, measure time, MSE, VDP and FLIP against the converged reference (and the paper's "
+        "gold standard), and write results.json and an HTML report (resumable)")
 
 
 def add_arguments(parser) -> None:
@@ -52,11 +55,16 @@ def add_run_arguments(parser) -> None:
     parser.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, MAX_SIDE), default=32,
                         help="tile edge in pixels (default 32)")
     parser.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
-    add_quality_arguments(parser)
+    add_quality_arguments(parser, "samples of the converged reference each run is measured "
+                                  "against (default max(1024, 16 x the ceiling); cached)")
 
 
-def add_quality_arguments(parser) -> None:
-    """--denoise and --vdp, shared with ``demo``."""
+def add_quality_arguments(parser, reference_help: str | None = None) -> None:
+    """--denoise, --vdp and --reference-spp, shared with ``demo`` (which hides the last)."""
+    from . import argtypes
+
+    parser.add_argument("--reference-spp", type=argtypes.SAMPLES, metavar="N",
+                        help=reference_help or argparse.SUPPRESS)
     parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="denoise every finished frame with Open Image Denoise, gold and "
                              "selective alike (default on; off compares the raw path-traced frames)")
@@ -75,7 +83,7 @@ def settings_from_args(args, variants=None):
     settings = ValidationSettings(
         max_spp=args.max_spp, resolution=parse_resolution(args.resolution),
         longest_side=args.size, min_spp=args.min_spp, tile_size=args.tile_size, seed=args.seed,
-        vdp=args.vdp, denoise=args.denoise,
+        vdp=args.vdp, denoise=args.denoise, reference_spp=args.reference_spp,
         variants=variants or parse_variants(getattr(args, "variants", None)))
     settings.render_options()       # InputError for impossible options, before any work
     return settings
@@ -104,7 +112,7 @@ def run_and_report(jobs, settings, out: Path, label: str, quiet: bool) -> dict:
     for name, scene in results["scenes"].items():
         for warning in scene["warnings"]:
             print(f"xsl-render: warning: {name}: {warning}", file=sys.stderr)
-        print(scene_line(name, scene))
+        print("\n".join(scene_lines(name, scene)))
     if not results["vdp"]["ran"]:
         print(f"VDP skipped: {results['vdp']['skipped']}")
     print(f"{results['rendered']} step(s) computed, {results['reused']} reused; "
@@ -113,17 +121,33 @@ def run_and_report(jobs, settings, out: Path, label: str, quiet: bool) -> dict:
     return results
 
 
-def scene_line(name: str, scene: dict) -> str:
-    """'road: gold 12.3 s; xsl 2.1 s (5.86x, mean FLIP 0.0312); ...'"""
-    parts = []
+def scene_lines(name: str, scene: dict) -> list[str]:
+    """The scene's runs against the converged reference: time, samples, FLIP, MSE and, where
+    the uniform runs make a curve, the equal-quality speedup over uniform (never a time ratio
+    to gold without equal quality)."""
+    from ...core.validation.curves_results import metric_values, speedup_text
+    from ...core.validation.report_reference import reference_description
+
+    size = scene["size"]
+    lines = [f"{name} ({size[0]}x{size[1]}, ceiling {scene['max_spp']} spp) against "
+             f"{reference_description(scene)}:",
+             f"  {'run':<30} {'time':>8} {'spp':>6} {'FLIP':>7} {'MSE':>9}   equal quality vs uniform (FLIP, MSE)"]
     for run_name, run in scene["runs"].items():
-        if run_name == "gold":
-            parts.append(f"gold {run['time_s']:.1f} s")
-            continue
-        flip = run["metrics"].get("flip", {}).get("mean_flip")
-        flip_text = f", mean FLIP {flip:.4f}" if flip is not None else ""
-        parts.append(f"{run_name} {run['time_s']:.1f} s ({run['speedup_over_gold']:.2f}x{flip_text})")
-    return f"{name}: " + "; ".join(parts)
+        values = metric_values(run.get("reference_metrics", {}))
+        flip = "-" if values["flip"] is None else f"{values['flip']:.4f}"
+        mse = "-" if values["mse"] is None else f"{values['mse']:.2e}"
+        speedups = run.get("equal_quality")
+        if run["kind"] in ("gold", "uniform"):
+            verdict = "(on the uniform curve)"
+        elif speedups is None:
+            verdict = "(no uniform curve to compare with)"
+        else:
+            verdict = ", ".join(f"{speedup_text(speedups.get(m))} {m.upper()}" for m in ("flip", "mse"))
+            faster = [m.upper() for m in ("flip", "mse") if (speedups.get(m) or {}).get("faster")]
+            verdict += f": faster on {' and '.join(faster)}" if faster else ": not faster"
+        lines.append(f"  {run.get('label', run_name)[:30]:<30} {run['time_s']:>6.1f} s "
+                     f"{run['stats'].get('mean_spp', 0):>6.1f} {flip:>7} {mse:>9}   {verdict}")
+    return lines
 
 
 def run(args) -> int:

@@ -1,6 +1,7 @@
 """``xsl-render farm SCENE.blend --bundle DIR``: an Open Job Description job bundle.
 
-Writes DIR/template.yaml (steps Maps, Tiles and Composite; see ``core.farm.job_template``),
+Writes DIR/template.yaml (steps Maps, Tiles and Composite for xs and xsl; one step Render,
+a task per frame, for ``--mode guided --time-budget SECONDS``; see ``core.farm.job_template``),
 DIR/parameter_values.yaml and our marker file. Submit DIR to a farm that speaks Open Job
 Description (``deadline bundle submit DIR`` on AWS Deadline Cloud), or run it here with
 ``openjd run DIR/template.yaml -p SceneFile=SCENE.blend``. A bundle folder that exists and is
@@ -13,8 +14,10 @@ import shutil
 import sys
 from pathlib import Path
 
+from ...core.errors import InputError
 from . import argtypes
-from .common import (add_map_arguments, add_tile_arguments, map_options_from_args,
+from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
+                     guided_options_from_args, guided_render_options, map_options_from_args,
                      parse_resolution)
 
 NAME = "farm"
@@ -32,18 +35,21 @@ def add_arguments(parser) -> None:
     parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
                         help="render resolution (default: the scene's)")
     parser.add_argument("--max-spp", type=argtypes.SAMPLES,
-                        help="samples per pixel where the map is 1 (default: the scene's Cycles samples)")
-    parser.add_argument("--mode", choices=("xs", "xsl"), default="xsl",
-                        help="director map that plans the tiles (default xsl)")
-    parser.add_argument("--tasks-per-frame", type=int, default=DEFAULT_TASKS_PER_FRAME,
-                        help="tile tasks per frame, sharing its rectangles at about equal cost "
-                             f"(default {DEFAULT_TASKS_PER_FRAME})")
+                        help="samples per pixel where the map is 1 (default: the scene's Cycles "
+                             "samples); guided: an optional per-pixel ceiling (default none)")
+    parser.add_argument("--mode", choices=("xs", "xsl", "guided"), default="xsl",
+                        help="director map that plans the tiles (default xsl), or guided: each "
+                             "frame rendered within --time-budget by one task")
+    parser.add_argument("--tasks-per-frame", type=int, default=None,
+                        help="xs, xsl: tile tasks per frame, sharing its rectangles at about equal "
+                             f"cost (default {DEFAULT_TASKS_PER_FRAME})")
     parser.add_argument("--output", metavar="DIR",
                         help="where the job writes its frames (default: DIR/output of the bundle)")
     parser.add_argument("--executable", metavar="PATH",
                         help="the xsl-render command on the farm's machines (default: this one)")
     add_map_arguments(parser)
     add_tile_arguments(parser)
+    add_guided_arguments(parser)
 
 
 def default_executable() -> str:
@@ -79,14 +85,16 @@ def tile_options(args, max_spp: int, resolution):
 def run(args) -> int:
     from ...core.farm.job_bundle import check_bundle_folder, write_bundle
     from ...core.farm.job_template import FarmJob, job_template, parameter_values, parse_frames
-    from ...core.farm.task_groups import check_groups
 
     # Everything that needs no scene first: a bad option fails before Blender loads.
     map_options = map_options_from_args(args)
     frames = parse_frames(args.frames) if args.frames is not None else None
     resolution = parse_resolution(args.resolution)
-    check_groups(args.tasks_per_frame)
-    tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
+    guided, tasks_per_frame = _guided_or_tiles(args)
+    if guided is not None:
+        guided_render_options(guided, args.seed, resolution)                # checked now, set later
+    else:
+        tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
 
     from ...addon.scene.blend_session import open_blend
@@ -97,12 +105,19 @@ def run(args) -> int:
     camera_model(scene)                     # InputError for a scene without a camera
     if frames is None:
         frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
-    max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
-    options = tile_options(args, max_spp, resolution or render_size(scene))
+    if guided is not None:
+        options = guided_render_options(guided, args.seed, resolution or render_size(scene))
+        what = (f"guided within {guided.time_budget:g} s per frame "
+                + ("without a ceiling" if guided.max_spp is None else f"up to {guided.max_spp} spp")
+                + f", importance {guided.importance}, one task per frame")
+    else:
+        max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
+        options = tile_options(args, max_spp, resolution or render_size(scene))
+        what = f"{args.mode} up to {max_spp} spp, {tasks_per_frame} tile tasks per frame"
     job = FarmJob(scene=scene_path, scene_name=scene.name, frames=frames,
                   output=_output(args, bundle), mode=args.mode, map_options=map_options,
-                  options=options, tasks_per_frame=args.tasks_per_frame,
-                  executable=args.executable or default_executable()).check()
+                  options=options, tasks_per_frame=tasks_per_frame,
+                  executable=args.executable or default_executable(), guided=guided).check()
     write_bundle(bundle, job_template(job), parameter_values(job),
                  {"scene": str(scene_path), "scene_name": scene.name, "frames": frames})
     if scene.render.engine != "CYCLES":
@@ -110,7 +125,22 @@ def run(args) -> int:
               "the farm job uses Cycles", file=sys.stderr)
     width, height = options.resolution
     print(f"wrote {bundle}/template.yaml and parameter_values.yaml: frames {frames}, "
-          f"{width}x{height}, {args.mode} up to {max_spp} spp, {args.tasks_per_frame} tile tasks "
-          f"per frame; run here with: openjd run {bundle}/template.yaml -p SceneFile={scene_path}"
+          f"{width}x{height}, {what}; run here with: openjd run {bundle}/template.yaml -p SceneFile={scene_path}"
           + (f" -p OutputDir={job.output}" if Path(job.output).is_absolute() else ""))
     return 0
+
+
+def _guided_or_tiles(args):
+    """(GuidedOptions, 1) for --mode guided, (None, tile tasks per frame) for xs and xsl;
+    InputError for an option of the other kind."""
+    from ...core.farm.task_groups import check_groups
+
+    if args.mode == "guided":
+        if args.tasks_per_frame is not None:
+            raise InputError("--tasks-per-frame is for xs and xsl: a guided frame is one task")
+        return guided_options_from_args(args), 1
+    if args.time_budget is not None:
+        raise InputError(f"--time-budget is for --mode guided (got --mode {args.mode})")
+    tasks = DEFAULT_TASKS_PER_FRAME if args.tasks_per_frame is None else args.tasks_per_frame
+    check_groups(tasks)
+    return None, tasks

@@ -10,6 +10,11 @@ current results are kept (``core.farm.files``), so a crashed or cancelled job re
         -> DIR/work/frame_NNNN/tiles/<rectangle>.exr + .json for the rectangles of task G of K
     farm-task composite --frame N --output DIR [--groups K]
         -> DIR/frame_NNNN.exr, frame_NNNN_spp.exr/.png, frame_NNNN.json
+    farm-task guided SCENE.blend --frame N --output DIR --scene-name S --resolution WxH
+        --time-budget SECONDS [--max-spp N (0: no ceiling)] [--importance none|x|xs|xsl]
+        [--pilot-fraction F] [--guided-exponent Y] [--level-ratio R] [--tile-size N] [--seed N]
+        [map options]
+        -> the same files as composite, the frame rendered with the guided sampler
 """
 from __future__ import annotations
 
@@ -17,11 +22,13 @@ import sys
 from pathlib import Path
 
 from . import argtypes
-from .common import (add_map_arguments, add_tile_arguments, map_options_from_args,
-                     render_options_from_args, warnings_as_lines)
+from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
+                     guided_options_from_args, guided_render_options, map_options_from_args,
+                     parse_resolution, render_options_from_args, warnings_as_lines)
 
 NAME = "farm-task"
-HELP = "run one task of a farm job (maps, tiles or composite of a frame); used by job templates"
+HELP = ("run one task of a farm job (maps, tiles or composite of a frame, or a guided frame); "
+        "used by job templates")
 MODES = ("xs", "xsl")
 #: Each task keeps what it finished, with what it was made from, so a rerun resumes.
 OUTPUTS_AS_A_SET = False
@@ -34,11 +41,15 @@ def _frame_arguments(parser) -> None:
 
 
 def add_arguments(parser) -> None:
+    from ...core import checks
+    from ...core.sampling.render_options import MIN_TILE_SIZE
+
     steps = parser.add_subparsers(dest="step", metavar="STEP")
     steps.required = True
 
     maps = steps.add_parser("maps", help="director maps and tile plan of a frame")
-    maps.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
+    maps.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
     maps.add_argument("--scene-name", required=True, help="which scene of the file")
     _frame_arguments(maps)
     maps.add_argument("--mode", required=True, choices=MODES, help="which director map plans the tiles")
@@ -46,13 +57,12 @@ def add_arguments(parser) -> None:
                       help="samples per pixel where the map is 1")
     maps.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
                       help="render resolution")
-    add_map_arguments(maps)
-    maps.add_argument("--minbound-value", choices=("true", "false"),
-                      help="MinBound as a value (job templates), overrides --minbound/--no-minbound")
+    _map_arguments(maps)
     add_tile_arguments(maps)
 
     tiles = steps.add_parser("tiles", help="render one task's share of a frame's rectangles")
-    tiles.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
+    tiles.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
     _frame_arguments(tiles)
     tiles.add_argument("--group", type=int, required=True, help="this task's number, 1..--groups")
     tiles.add_argument("--groups", type=int, required=True, help="tile tasks per frame")
@@ -61,6 +71,43 @@ def add_arguments(parser) -> None:
     _frame_arguments(composite)
     composite.add_argument("--groups", type=int, help="tile tasks per frame (for the statistics)")
 
+    guided = steps.add_parser("guided", help="render a frame with the guided sampler within its time budget")
+    guided.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
+    guided.add_argument("--scene-name", required=True, help="which scene of the file")
+    _frame_arguments(guided)
+    guided.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render resolution")
+    guided.add_argument("--max-spp", type=argtypes.integer(0, checks.MAX_SAMPLES), default=0,
+                        help="the most samples any pixel may get; 0: no ceiling (default)")
+    add_guided_arguments(guided, budget_required=True)
+    guided.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, checks.MAX_SIDE), default=32,
+                        help="edge of the tiles the samples are allocated on (default 32)")
+    guided.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
+    _map_arguments(guided)
+
+
+def check(args) -> None:
+    """A guided task's options taken together (``GuidedOptions.check``), before anything loads;
+    --max-spp 0 is the job template's "no ceiling"."""
+    if args.step == "guided":
+        if args.max_spp == 0:
+            args.max_spp = None
+        guided_options_from_args(args)
+
+
+def _map_arguments(parser) -> None:
+    add_map_arguments(parser)
+    parser.add_argument("--minbound-value", choices=("true", "false"),
+                        help="MinBound as a value (job templates), overrides --minbound/--no-minbound")
+
+
+def _map_options(args):
+    """The map options, --minbound-value (a job template's) deciding MinBound when given."""
+    if args.minbound_value is not None:
+        args.minbound = args.minbound_value == "true"
+    return map_options_from_args(args)
+
 
 def _maps(args) -> int:
     from ...addon.farm_tasks import run_maps_task
@@ -68,9 +115,7 @@ def _maps(args) -> int:
     from ...core.farm.files import FrameFiles, valid_plan
     from ...core.maps.xmap import XMapWarning
 
-    if args.minbound_value is not None:
-        args.minbound = args.minbound_value == "true"
-    map_options = map_options_from_args(args)
+    map_options = _map_options(args)
     options = render_options_from_args(args)
     with warnings_as_lines(MapWarning, XMapWarning):
         outcome = run_maps_task(args.scene, args.scene_name, args.frame, args.output, args.mode,
@@ -124,5 +169,26 @@ def _composite(args) -> int:
     return 0
 
 
+def _guided(args) -> int:
+    from ...addon.farm_tasks import run_guided_task
+    from ...addon.maps.director_maps import MapWarning
+    from ...core.farm.files import FrameFiles
+    from ...core.maps.xmap import XMapWarning
+
+    guided = guided_options_from_args(args)           # --max-spp 0 became None in check()
+    options = guided_render_options(guided, args.seed, parse_resolution(args.resolution))
+    map_options = _map_options(args)
+    with warnings_as_lines(MapWarning, XMapWarning):
+        outcome = run_guided_task(args.scene, args.scene_name, args.frame, args.output, guided,
+                                  map_options, options)
+    for warning in outcome.warnings:
+        print(f"xsl-render: warning: frame {args.frame}: {warning}", file=sys.stderr)
+    stats, state = outcome.stats, "already done" if outcome.reused else "written"
+    print(f"frame {args.frame}: {FrameFiles(Path(args.output), args.frame).image} {state}: "
+          f"{stats['resolution'][0]}x{stats['resolution'][1]}, mean {stats['mean_spp']:.2f} spp in "
+          f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of a {guided.time_budget:g} s budget")
+    return 0
+
+
 def run(args) -> int:
-    return {"maps": _maps, "tiles": _tiles, "composite": _composite}[args.step](args)
+    return {"maps": _maps, "tiles": _tiles, "composite": _composite, "guided": _guided}[args.step](args)

@@ -1,7 +1,9 @@
-"""``xsl-render render SCENE.blend --mode gold|xs|xsl|uniform|adaptive --max-spp N --out FILE.exr``.
+"""``xsl-render render SCENE.blend --mode gold|xs|xsl|uniform|adaptive --max-spp N --out FILE.exr``
+and ``xsl-render render SCENE.blend --mode guided --time-budget SECONDS [--max-spp N] --out FILE.exr``.
 
 Writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel; the PNG's
-grey level is spp / max_spp) and, with --stats, the run's statistics as JSON. A ``#`` run in
+grey level is spp / max_spp, or spp / the most any pixel got for guided without a ceiling)
+and, with --stats, the run's statistics as JSON. A ``#`` run in
 FILE's name becomes the frame number; ``--frames START-END`` renders an animation
 (``render_animation.py``).
 """
@@ -17,13 +19,15 @@ from ...core.errors import InputError
 from ...core.frames import frame_path, has_frame_marker, parse_frame_range
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
 from . import argtypes
-from .common import (add_map_arguments, add_scene_arguments, add_tile_arguments,
-                     map_options_from_args, render_options_from_args, warnings_as_lines)
-from .render_common import render_baseline, summary_line
+from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
+                     guided_options_from_args, map_options_from_args, render_options_from_args,
+                     warnings_as_lines)
+from .render_common import render_baseline, spp_scale, summary_line
 
 NAME = "render"
-HELP = "render the scene selectively (xs, xsl) or as a baseline (gold, uniform, adaptive)"
-MODES = ("gold", "xs", "xsl", "uniform", "adaptive")
+HELP = ("render the scene selectively (xs, xsl), within a time budget where the error is "
+        "(guided), or as a baseline (gold, uniform, adaptive)")
+MODES = ("gold", "xs", "xsl", "uniform", "adaptive", "guided")
 
 
 def add_arguments(parser) -> None:
@@ -31,9 +35,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mode", required=True, choices=MODES,
                         help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
                              "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
-                             "adaptive sampling at equal time")
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, required=True,
-                        help="samples per pixel where the map is 1")
+                             "adaptive sampling at equal time; guided: a pilot pass, then the "
+                             "rest of --time-budget where the denoised frame keeps its error")
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None,
+                        help="samples per pixel where the map is 1 (every mode but guided, where it "
+                             "is an optional per-pixel ceiling)")
     parser.add_argument("--out", required=True, metavar="FILE.exr", type=argtypes.output_file(".exr"),
                         help="the rendered image")
     parser.add_argument("--stats", metavar="FILE.json", type=argtypes.output_file(),
@@ -62,13 +68,21 @@ def add_arguments(parser) -> None:
                              "wall time in --budget-from)")
     budget.add_argument("--noise-threshold", type=argtypes.number(above=0.0, hi=1.0), default=None,
                         help="adaptive: Cycles' noise threshold (default Cycles' own, 0.01)")
+    add_guided_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def check(args) -> None:
     """What relates several options (``cli.py`` runs this before anything else): the files the
-    render writes are distinct files, and uniform's --spp stays under the ceiling."""
+    render writes are distinct files, uniform's --spp stays under the ceiling, guided has its
+    --time-budget (and only guided), every other mode its --max-spp."""
     distinct_outputs(render_output_paths(args.out, args.stats))
+    if args.mode == "guided":
+        guided_options_from_args(args)
+    elif args.time_budget is not None:
+        raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
+    elif args.max_spp is None:
+        raise InputError(f"--mode {args.mode} needs --max-spp N")
     if args.spp is not None and args.max_spp is not None and args.spp > args.max_spp:
         raise InputError(f"--spp {args.spp} is above --max-spp {args.max_spp}, the ceiling of every mode")
 
@@ -110,6 +124,10 @@ def _render_budget(stats: dict, path: str) -> float:
 
 def _budget(args) -> dict:
     """Check the mode's inputs before the scene is opened; return what the mode needs."""
+    if args.mode == "guided":
+        return {"guided": guided_options_from_args(args), "map_options": map_options_from_args(args)}
+    if args.time_budget is not None:
+        raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
     stats = _read_budget(args.budget_from) if args.budget_from else None
     if args.mode in ("xs", "xsl"):
         if args.map:
@@ -218,8 +236,8 @@ def run(args) -> int:
         stats["budget_from"] = budget["from"]
     if "budget_mean_spp" in budget:
         stats["budget_mean_spp"] = budget["budget_mean_spp"]
-    write_render_outputs(out, outcome.image, outcome.samples, stats, options.max_spp, options.seed,
-                         args.stats)
+    write_render_outputs(out, outcome.image, outcome.samples, stats, spp_scale(args, options, outcome),
+                         options.seed, args.stats)
     print(summary_line(args.mode, stats, out))
     return 0
 

@@ -18,7 +18,7 @@ from ...core.sampling.render_files import write_render_outputs
 
 
 def render_frames(scene, args, options, budget: dict, frames: range, out: Path) -> int:
-    from ...addon.animation import frames_steps, selective_frame, single_render_frame
+    from ...addon.animation import frames_steps, guided_frame, selective_frame, single_render_frame
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
     from ...core.maps.files import write_map_set
@@ -27,12 +27,14 @@ def render_frames(scene, args, options, budget: dict, frames: range, out: Path) 
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
     from .common import warnings_as_lines
-    from .render_common import render_baseline, summary_line
+    from .render_common import render_baseline, spp_scale, summary_line
 
     save_maps = Path(args.save_maps) if args.save_maps else None
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
     if args.mode in ("xs", "xsl"):
         job = selective_frame(budget["compute_maps"], options, args.mode, cache_dir)
+    elif args.mode == "guided":
+        job = guided_frame(budget["guided"], budget["map_options"], options, cache_dir)
     else:
         job = single_render_frame(lambda s: render_baseline(s, args, options, budget), args.mode)
 
@@ -43,7 +45,7 @@ def render_frames(scene, args, options, budget: dict, frames: range, out: Path) 
         for warning in result.outcome.warnings:
             print(f"xsl-render: warning: frame {result.frame}: {warning}", file=sys.stderr)
         write_render_outputs(path, result.outcome.image, result.outcome.samples, stats,
-                             options.max_spp, options.seed)
+                             spp_scale(args, options, result.outcome), options.seed)
         if save_maps is not None and result.maps is not None:
             write_map_set(save_maps / f"{result.frame:04d}", result.maps)
         print(f"frame {result.frame}: " + summary_line(args.mode, stats, path), flush=True)

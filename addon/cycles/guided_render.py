@@ -1,0 +1,202 @@
+"""A render that spends a time budget where the denoised frame will keep its error
+(``--mode guided``).
+
+1. Importance, when asked for: the X, XS or XSL director map, computed by the caller
+   (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
+2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else.
+3. Pilot: the whole frame at a quarter of its resolution, at most 16 samples, for at most a
+   small share of the budget (Cycles' own time limit; the count is read back from Cycles).
+4. Scores: the pilot denoised, its display luminance's gradient per tile
+   (``core/sampling/guided_plan``, which also says why the pilot is thrown away).
+5. Final pass: per rectangle, its samples from the first, as many as fit in what is left of
+   the budget once the final denoise is set aside; a pacer rescales every next rectangle to
+   the clock. Every pixel is rendered in exactly one Cycles session.
+6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
+
+Every setting touched is put back (``preserved_scene``) after success, error or cancel.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...core.progress import ProgressCallback, Steps, run_steps
+from ...core.sampling.guided_plan import (BudgetPacer, GuidedOptions, error_scores, plan_final_pass,
+                                          tile_means)
+from ...core.sampling.pass_merge import PassAccumulator
+from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.tile_plan import check_director_map, tile_windows
+from ...core.tonemap import standard_view
+from ..scene.state import preserved_scene
+from .selective_render import RenderOutcome, finish_image, prepare_render, render_stats, tile_entry
+from .tile_render import CyclesWindowRenderer
+
+#: Pixels of the scene-sync render (as the equal-time baselines do it).
+_SYNC_WINDOW = 8
+#: Fixed cost assumed for one Cycles render of a rectangle (a render call, its EXR with the
+#: guides written and read back; 2 cores).
+_RENDER_OVERHEAD_S = 0.008
+#: The final denoise is guessed from the frame's pixels (road: 0.25 s for 147456 pixels on
+#: 2 cores), or from the pilot's denoise when that took longer (a loaded machine).
+_DENOISE_SECONDS_PER_PIXEL = 1.7e-6
+#: The pilot's sample cap and resolution divisor: 4 spp at a quarter of the resolution scored
+#: the tiles as well as more did on the road scene, for ~1/64 of a 16-spp render's samples.
+_PILOT_MAX_SPP = 16
+_PILOT_REDUCE = 4
+#: The pilot keeps at least this many pixels on its short edge (tiny frames are reduced less).
+_PILOT_MIN_EDGE = 16
+
+
+def pilot_reduce(width: int, height: int) -> int:
+    """The pilot's resolution divisor: ``_PILOT_REDUCE``, halved until the short edge keeps
+    ``_PILOT_MIN_EDGE`` pixels (1 for tiny frames)."""
+    reduce = _PILOT_REDUCE
+    while reduce > 1 and min(width, height) // reduce < _PILOT_MIN_EDGE:
+        reduce //= 2
+    return reduce
+
+
+class _Clock:
+    """Seconds since the start (``already`` spent before it), without the time spent waiting
+    between steps (a modal operator's timer ticks are not rendering time)."""
+
+    def __init__(self, already: float = 0.0):
+        self.start = time.perf_counter() - already
+        self.waited = 0.0
+
+    def now(self) -> float:
+        return time.perf_counter() - self.start - self.waited
+
+    def pause(self) -> float:
+        return time.perf_counter()
+
+    def resume(self, paused: float) -> None:
+        self.waited += time.perf_counter() - paused
+
+
+def render_guided(scene, options: RenderOptions, guided: GuidedOptions,
+                  importance: np.ndarray | None = None, map_seconds: float = 0.0,
+                  progress: ProgressCallback | None = None) -> RenderOutcome:
+    """Render ``scene`` within ``guided.time_budget`` seconds (see the module docstring).
+
+    Parameters
+    ----------
+    options
+        Seed, resolution and denoising (its ``max_spp`` is the ceiling the stats report;
+        ``guided.max_spp`` is the one the allocation obeys).
+    guided
+        The budget and how it is spent.
+    importance
+        (H, W) director map in [0, 1] at the render size weighing the error, or None.
+    map_seconds
+        Seconds already spent on ``importance``: part of the budget, recorded as "maps".
+    """
+    return run_steps(guided_steps(scene, options, guided, importance, map_seconds), progress)
+
+
+def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
+                 importance: np.ndarray | None = None, map_seconds: float = 0.0) -> Steps[RenderOutcome]:
+    """``render_guided`` as steps (``core.progress``); closing it restores the scene."""
+    guided.check()
+    budget = guided.time_budget
+    clock = _Clock(already=map_seconds)
+    phases: dict[str, float] = {"maps": map_seconds}
+    with preserved_scene(scene):
+        width, height, warnings = prepare_render(scene, options)
+        if importance is not None:
+            importance = check_director_map(importance, width, height)
+        yield 0.0, "guided: scene sync"
+        windows = tile_windows(width, height, guided.tile_size)
+        image = PassAccumulator(width, height, 4)
+        guides = PassAccumulator(width, height, 6)
+        tiles: list[dict] = []
+        with CyclesWindowRenderer(scene, options.seed, guides=True) as renderer:
+            began = clock.now()
+            side = min(_SYNC_WINDOW, width, height)
+            row, col = (height - side) // 2, (width - side) // 2
+            renderer.render((row, row + side, col, col + side), 1)
+            phases["sync"] = clock.now() - began
+
+            # The pilot: a quarter of the resolution, a first sample timing it, then as many
+            # as its share allows. (No Cycles time limit: a limit set and unset at the same
+            # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
+            reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
+            pilot_share = guided.pilot_fraction * (budget - clock.now() - reserve)
+            reduce = pilot_reduce(width, height)
+            paused = clock.pause()
+            yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
+            clock.resume(paused)
+            began = clock.now()
+            pilot = renderer.render(None, 1, reduce=reduce)
+            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(pilot.seconds, 1e-6))
+            have = max(1, min(guided.ceiling, _PILOT_MAX_SPP, fit))
+            if have > 1:
+                pilot = renderer.render(None, have, reduce=reduce)
+            phases["pilot"] = clock.now() - began
+            pilot_samples = float(np.sum(pilot.samples) if np.ndim(pilot.samples) else
+                                  pilot.samples * pilot.pixels.shape[0] * pilot.pixels.shape[1])
+            # Seconds per pixel-sample: a pilot pixel traces what a full one does per sample.
+            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / max(1.0, pilot_samples)
+            tiles.append(tile_entry((0, height, 0, width), pilot)
+                         | {"pass": "pilot", "resolution_divisor": reduce})
+
+            # Scores from the denoised pilot.
+            paused = clock.pause()
+            yield 0.15, f"guided: scoring the pilot ({have} spp)"
+            clock.resume(paused)
+            began = clock.now()
+            # Denoised whatever the final image gets: the score is the error a denoised
+            # frame keeps, and a raw pilot's gradient is mostly its noise.
+            from .denoise import denoise
+
+            scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
+            scoring_denoise = clock.now() - began
+            scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
+            weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
+            phases["scoring"] = clock.now() - began
+
+            # The final pass: planned for the time left once the final denoise is set aside,
+            # then planned again with each of its renders' fixed cost set aside too.
+            denoise_reserve = max(reserve, scoring_denoise) if options.denoise else 0.0
+            left = budget - clock.now() - denoise_reserve
+            final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate)
+            final = plan_final_pass(scores, weights, width, height, guided,
+                                    max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate)
+            rects = final.rects
+            pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S)
+            began = clock.now()
+            for index, rect in enumerate(rects):
+                paused = clock.pause()
+                yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
+                clock.resume(paused)
+                factor = pacer.scale(budget - clock.now() - denoise_reserve)
+                # Every pixel gets a sample, even when the clock is already out.
+                spp = max(1, min(int(round(rect.spp * factor)), guided.ceiling))
+                piece = renderer.render(rect.window, spp)
+                image.add(rect.window, piece.pixels, spp)
+                guides.add(rect.window, piece.guides, spp)
+                tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
+            phases["final"] = clock.now() - began
+
+        began = clock.now()
+        merged, merged_guides = image.result(), guides.result()
+        samples = image.samples.astype(np.float32)
+        phases["composite"] = clock.now() - began
+        merged = finish_image(merged, merged_guides if options.denoise else None, options, phases)
+        stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings)
+    # Phases add up to the wall time (progress reports and bookkeeping go to "other").
+    phases["other"] = max(0.0, clock.now() - sum(phases.values()))
+    stats["wall_s"] = sum(phases.values())
+    stats.update(time_budget_s=budget, guided=guided.to_dict(), pilot_spp=have,
+                 pilot_seconds=pilot.seconds, pilot_resolution_divisor=reduce,
+                 seconds_per_pixel_sample=rate,
+                 final_pass=final.to_dict(),
+                 denoise_reserved_s=denoise_reserve)
+    if stats["wall_s"] > 1.1 * budget:
+        note = (f"the render took {stats['wall_s']:.2f} s of a {budget:g} s budget "
+                f"(scene sync {phases['sync']:.2f} s, pilot {phases['pilot']:.2f} s at {have} spp)")
+        warnings.append(note)
+        stats["warnings"] = warnings
+    yield 1.0, "guided: done"
+    return RenderOutcome(merged, samples, stats, warnings)

@@ -1,0 +1,118 @@
+"""The converged reference of a scene: looked up in the caches, or rendered and cached.
+
+The render is ``selective_render.render_uniform`` with the reference's samples and seed,
+denoised by the same ``finish_image`` path as every run, at the frame and resolution asked
+for. The key, the defaults and the cache folders are plain data (``core.validation.reference``).
+
+A reference takes minutes (one Cycles render: its progress is reported sample by sample).
+Ctrl-C follows the command line's convention (``operators/interrupt.py``): the first asks to
+stop after the render, which then writes nothing; the second stops at once. Either way the
+cache never holds half an entry: the image and its record go through temporary names, the
+record last.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ...core.files import file_sha256
+from ...core.progress import ProgressCallback
+from ...core.sampling.render_options import RenderOptions
+from ...core.validation.reference import (REFERENCE_SEED, CachedReference, ReferenceInputs,
+                                          check_reference_options, default_reference_spp,
+                                          find_reference, user_folder, write_reference)
+from ...core.validation.store import check_output_folder
+from ..cycles.denoise import DENOISE_VERSION
+from ..cycles.selective_render import render_uniform
+from ..scene.probe import render_size
+from ..scene.state import preserved_scene
+
+
+def blender_version() -> str:
+    import bpy
+
+    return bpy.app.version_string
+
+
+def scene_ceiling(scene) -> int:
+    """The scene's own Cycles sample count: the contestants' ceiling when none is given."""
+    return max(1, int(scene.cycles.samples))
+
+
+def reference_inputs(scene, blend_path: str | Path, spp: int | None = None, seed: int = REFERENCE_SEED,
+                     resolution: tuple[int, int] | None = None, frame: int | None = None,
+                     max_spp: int | None = None, blend_sha256: str | None = None) -> ReferenceInputs:
+    """The inputs (and so the cache key) of the reference of ``scene`` from ``blend_path``.
+
+    Parameters
+    ----------
+    spp
+        Samples per pixel; None: ``max(1024, 16 x ceiling)``, the ceiling being ``max_spp``
+        or the scene's own Cycles sample count.
+    seed
+        Cycles' seed (default ``REFERENCE_SEED``).
+    resolution, frame
+        None: the scene's own render size and current frame.
+    blend_sha256
+        The file's hash when the caller has it already.
+    """
+    check_reference_options(spp, seed)
+    if spp is None:
+        spp = default_reference_spp(max_spp if max_spp is not None else scene_ceiling(scene))
+    RenderOptions(max_spp=spp, seed=seed, resolution=resolution).check()
+    return ReferenceInputs(
+        blend_sha256=blend_sha256 or file_sha256(blend_path), scene=scene.name,
+        frame=int(scene.frame_current if frame is None else frame),
+        resolution=tuple(resolution) if resolution is not None else render_size(scene),
+        spp=int(spp), seed=int(seed), blender=blender_version(), denoise=DENOISE_VERSION)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A reference ready to compare with: its file, inputs and where it came from."""
+
+    path: Path
+    inputs: ReferenceInputs
+    source: str             # "shipped", "cache" or "rendered"
+    stats: dict
+
+    def to_dict(self) -> dict:
+        return {"path": str(self.path), "key": self.inputs.key, "source": self.source,
+                "inputs": self.inputs.to_dict(),
+                "render_s": self.stats.get("reference_wall_s")}
+
+
+def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback | None = None,
+                     environ=None, file_name: str | None = None) -> Reference:
+    """The cached reference for ``inputs``, or render it now and cache it.
+
+    ``scene`` must be the scene ``inputs`` were made from (``reference_inputs``); it is left
+    as it was found. The user cache folder is checked for writing before the render starts.
+    """
+    found = find_reference(inputs.key, environ)
+    if found is not None:
+        return _from_cache(found, inputs)
+    folder = check_output_folder(user_folder(environ), "the reference cache")
+    image, stats = render_reference(scene, inputs, progress)
+    entry = write_reference(folder, inputs, image, stats, file_name=file_name)
+    return Reference(entry.path, inputs, "rendered", stats)
+
+
+def _from_cache(found: CachedReference, inputs: ReferenceInputs) -> Reference:
+    return Reference(found.path, inputs, found.source, found.record.get("stats", {}))
+
+
+def render_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback | None = None):
+    """Render the reference (uniform, ``inputs.spp`` samples, ``inputs.seed``, denoised like
+    every run) at ``inputs.frame`` and ``inputs.resolution``; returns (image, stats)."""
+    options = RenderOptions(max_spp=inputs.spp, seed=inputs.seed, resolution=inputs.resolution,
+                            denoise=True).check()
+    started = time.perf_counter()
+    with preserved_scene(scene):
+        scene.frame_set(inputs.frame)
+        outcome = render_uniform(scene, options, spp=inputs.spp, progress=progress)
+    stats = {key: outcome.stats[key] for key in ("mode", "resolution", "seed", "wall_s", "phases_s",
+                                                  "mean_spp", "total_samples")}
+    stats["reference_wall_s"] = time.perf_counter() - started
+    return outcome.image, stats

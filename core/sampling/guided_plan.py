@@ -1,0 +1,271 @@
+"""Where a time-budgeted render spends its samples (``--mode guided``).
+
+The guided render (``addon/cycles/guided_render.py``) first renders the whole frame at a
+quarter of its resolution with a few samples (the pilot: about 1 % of the samples of the
+render), denoises it, and scores every tile by how much error it is likely to keep after
+denoising: the mean gradient of the denoised pilot's display luminance. Measured on the road
+scene against a converged reference (1024 spp), this score correlates with the per-tile
+error of a denoised 16-spp render as well as the difference of two denoised half-sample
+pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from the low-resolution
+pilot), for one cheap pilot instead of two, and the error of a denoised frame sits where the
+image has edges, highlights and glows.
+
+The budget then goes to the tiles in proportion to ``(score * importance) ** exponent``, every
+pixel rendered from its first sample in one Cycles session. Two findings shape this:
+
+- FLIP after denoising falls only about as spp^-0.27 on these scenes, and its error is spread
+  evenly over the frame (the worst 20 % of 32-px tiles hold ~30 % of it), so moving samples
+  buys MSE far more than FLIP. Even an oracle allocation from the true per-tile error gains
+  only 1.10-1.14x in samples on FLIP (about 2.5x on MSE). The exponent is therefore gentle
+  (0.15 keeps FLIP level with uniform at equal samples and lowers MSE ~7 %); the paper's XSL
+  map scales samples linearly (exponent 1) and loses FLIP badly.
+- Blender 5 learns its volume scattering probability guiding per render session, so a pixel
+  whose samples are split over two sessions is noisier than one rendered in one (about 3 %
+  more FLIP per extra session at 16 spp, even when the second continues the first's sample
+  sequence), and merging two seeds of 8 costs ~5 % FLIP against one render of 16. A
+  full-resolution pilot continued by the final pass therefore loses what it was meant to
+  win; the low-resolution pilot is thrown away instead.
+
+``importance`` is the director map (1 everywhere unless asked for). Counts are rounded to
+powers of ``level_ratio`` so that neighbouring tiles share them and merge into few renders.
+
+Everything here is plain numbers; the clock is read by the caller.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .composite import Window
+from .render_options import MIN_TILE_SIZE
+from .tile_plan import Rect, merge_rects, tile_windows
+
+#: The per-pixel ceiling when none is asked for: far above any budget's reach on a CPU, and
+#: well inside what Cycles accepts (2^24 samples).
+UNBOUNDED_SPP = 1 << 16
+#: The longest time budget accepted: a week (anything longer is a typo).
+MAX_TIME_BUDGET = 7 * 24 * 3600.0
+#: Director maps the allocation can weigh the error by.
+IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
+#: A tile's score never falls below this share of the frame's mean score, so that flat
+#: tiles, whose pilot gradient is noise-free zero, still get their share.
+SCORE_FLOOR = 0.05
+#: The final pass is cut into at least this many renders, so that the ones at its end can
+#: make up for a region that costs more per sample than the pilot said (a fog box on the
+#: floor costs twice the sky).
+FINAL_PASS_PIECES = 10
+
+
+@dataclass(frozen=True)
+class GuidedOptions:
+    """How a guided render spends its time budget.
+
+    Parameters
+    ----------
+    time_budget
+        Seconds for the whole render: maps, scene sync, passes, denoising.
+    max_spp
+        Per-pixel ceiling; None: no ceiling but ``UNBOUNDED_SPP``.
+    pilot_fraction
+        Most of the budget (after maps and scene sync) the low-resolution pilot may take.
+    exponent
+        Allocation exponent on the tile scores (0: uniform).
+    importance
+        Director map weighting the scores: "none", "x", "xs" or "xsl".
+    tile_size
+        Edge of the tiles the allocation is made on, in pixels.
+    level_ratio
+        Sample counts of the final pass are rounded to powers of this ratio.
+    """
+
+    time_budget: float
+    max_spp: int | None = None
+    pilot_fraction: float = 0.05
+    exponent: float = 0.15
+    importance: str = "none"
+    tile_size: int = 32
+    level_ratio: float = 1.5
+
+    def check(self) -> "GuidedOptions":
+        """Raise InputError naming the first impossible option; return self."""
+        if not (math.isfinite(self.time_budget) and self.time_budget > 0.0):
+            raise InputError(f"--time-budget must be a positive number of seconds (got {self.time_budget})")
+        if self.time_budget > MAX_TIME_BUDGET:
+            raise InputError(f"--time-budget {self.time_budget:g} s is more than a week")
+        if self.max_spp is not None and not 1 <= self.max_spp <= UNBOUNDED_SPP:
+            raise InputError(f"--max-spp must be between 1 and {UNBOUNDED_SPP} (got {self.max_spp})")
+        if not (math.isfinite(self.pilot_fraction) and 0.0 < self.pilot_fraction <= 1.0):
+            raise InputError(f"--pilot-fraction must be in (0, 1] (got {self.pilot_fraction})")
+        if not (math.isfinite(self.exponent) and 0.0 <= self.exponent <= 2.0):
+            raise InputError(f"--guided-exponent must be in [0, 2] (got {self.exponent})")
+        if self.importance not in IMPORTANCE_MAPS:
+            raise InputError(f"--importance must be one of {', '.join(IMPORTANCE_MAPS)} (got '{self.importance}')")
+        if self.tile_size < MIN_TILE_SIZE:
+            raise InputError(f"--tile-size must be at least {MIN_TILE_SIZE} pixels (got {self.tile_size})")
+        if not (math.isfinite(self.level_ratio) and 1.0 < self.level_ratio <= 4.0):
+            raise InputError(f"--level-ratio must be in (1, 4] (got {self.level_ratio})")
+        return self
+
+    @property
+    def ceiling(self) -> int:
+        return UNBOUNDED_SPP if self.max_spp is None else self.max_spp
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def tile_means(image: np.ndarray, windows: list[Window], scale: int = 1) -> np.ndarray:
+    """Mean of ``image`` (h, w) over each window of the full frame; ``scale`` is how many
+    full-resolution pixels one pixel of ``image`` spans (2 for a half-resolution image)."""
+    height, width = image.shape[:2]
+    means = np.empty(len(windows))
+    for index, (row0, row1, col0, col1) in enumerate(windows):
+        r0, c0 = min(row0 // scale, height - 1), min(col0 // scale, width - 1)
+        r1, c1 = max(r0 + 1, -(-row1 // scale)), max(c0 + 1, -(-col1 // scale))
+        means[index] = float(np.mean(image[r0:r1, c0:c1]))
+    return means
+
+
+def error_scores(display_luminance: np.ndarray, windows: list[Window], scale: int = 1) -> np.ndarray:
+    """Each tile's score: the mean gradient magnitude of the denoised pilot's display
+    luminance (values in [0, 1]) over the tile, floored at ``SCORE_FLOOR`` x the mean."""
+    luminance = np.asarray(display_luminance, np.float64)
+    if luminance.ndim != 2 or min(luminance.shape) < 2:
+        raise ValueError(f"the pilot luminance must be an image of at least 2x2 pixels (got {luminance.shape})")
+    gradient = np.hypot(*np.gradient(luminance))
+    scores = tile_means(gradient, windows, scale)
+    floor = SCORE_FLOOR * max(float(scores.mean()), 1e-12)
+    return np.maximum(scores, floor)
+
+
+def allocate(weights: np.ndarray, areas: np.ndarray, have: float, extra_samples: float,
+             ceiling: int) -> np.ndarray:
+    """Total samples per pixel of each tile after the final pass.
+
+    Tiles get ``max(have, s * weight)``, capped at ``ceiling``, with ``s`` chosen so that
+    the samples added, ``sum(area * (total - have))``, equal ``extra_samples`` (or as many
+    as the ceiling lets in).
+
+    Parameters
+    ----------
+    weights : (n,) non-negative tile weights (at least one positive).
+    areas : (n,) pixels per tile.
+    have : samples per pixel every tile already has (the pilot's).
+    extra_samples : pixel-samples the final pass may add.
+    ceiling : most samples per pixel a tile may reach.
+    """
+    weights = np.asarray(weights, np.float64)
+    areas = np.asarray(areas, np.float64)
+    if weights.shape != areas.shape or weights.ndim != 1 or not len(weights):
+        raise ValueError("weights and areas must be matching non-empty vectors")
+    if not (np.isfinite(weights).all() and (weights >= 0).all() and weights.max() > 0):
+        raise ValueError("weights must be finite, non-negative and not all zero")
+    have = float(have)
+    if extra_samples <= 0 or have >= ceiling:
+        return np.full(len(weights), min(have, float(ceiling)))
+
+    def added(scale: float) -> float:
+        return float((areas * (np.clip(scale * weights, have, ceiling) - have)).sum())
+
+    if added(ceiling / weights[weights > 0].min()) <= extra_samples:
+        return np.where(weights > 0, float(ceiling), have)
+    low, high = 0.0, ceiling / weights[weights > 0].min()
+    for _ in range(80):                      # bisection on a monotone function
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if added(middle) < extra_samples else (low, middle)
+    return np.clip(low * weights, have, ceiling)
+
+
+def round_to_levels(counts: np.ndarray, ratio: float, anchor: float = 1.0) -> np.ndarray:
+    """Counts (>= 0) rounded, in log space, to the nearest level ``anchor * ratio**k`` (0
+    stays 0, anything below half a sample becomes 0), as integers: nearby counts share a
+    level, and a count equal to ``anchor`` stays exact."""
+    counts = np.asarray(counts, np.float64)
+    positive = counts >= 0.5
+    anchor = max(float(anchor), 1.0)
+    exponents = np.round(np.log(np.maximum(counts, 0.5) / anchor) / math.log(ratio))
+    levels = np.maximum(1.0, np.round(anchor * ratio ** exponents))
+    return np.where(positive, levels, 0).astype(np.int64)
+
+
+@dataclass(frozen=True)
+class FinalPass:
+    """The rectangles of the final pass: each renders its pixels' ``spp`` samples from the
+    first, in one Cycles session (see the module docstring)."""
+
+    rects: list[Rect]
+    totals: np.ndarray               # (n_tiles,) planned samples per pixel of each tile
+
+    @property
+    def samples(self) -> int:
+        return sum(rect.samples for rect in self.rects)
+
+    def to_dict(self) -> dict:
+        return {"renders": len(self.rects), "samples": self.samples,
+                "rects": [rect.to_dict() for rect in self.rects]}
+
+
+def plan_final_pass(scores: np.ndarray, importance: np.ndarray | None, width: int, height: int,
+                    options: GuidedOptions, pixel_samples: float) -> FinalPass:
+    """The final pass of a guided render: tiles of ``options.tile_size`` (the windows of
+    ``tile_plan.tile_windows``, in that order, as ``scores`` and ``importance`` are) sharing
+    ``pixel_samples`` pixel-samples, every pixel at least one."""
+    windows = tile_windows(width, height, options.tile_size)
+    if len(scores) != len(windows) or (importance is not None and len(importance) != len(windows)):
+        raise ValueError("one score (and importance) per tile is needed")
+    areas = np.array([(r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in windows], np.float64)
+    weighted = np.asarray(scores, np.float64) * (1.0 if importance is None else np.asarray(importance, np.float64))
+    weights = np.maximum(weighted, 1e-12) ** options.exponent
+    totals = allocate(weights, areas, 1, pixel_samples - areas.sum(), options.ceiling)
+    # Levels anchored at the mean count: a flat allocation stays exact.
+    mean = float((areas * totals).sum() / areas.sum())
+    counts = np.clip(round_to_levels(totals, options.level_ratio, anchor=round(mean)), 1, options.ceiling)
+    rects = merge_rects([Rect(r0, r1, c0, c1, int(count))
+                         for (r0, r1, c0, c1), count in zip(windows, counts)])
+    return FinalPass(rects=split_rects(rects, FINAL_PASS_PIECES), totals=totals)
+
+
+def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
+    """``rects`` with any holding more than 1/``pieces`` of all their samples cut into bands
+    of whole rows that do not (a single row is not cut): a render's cost is only known once
+    it is done, and the renders after it make up for it (``BudgetPacer``)."""
+    most = max(1, -(-sum(rect.samples for rect in rects) // pieces))
+    out = []
+    for rect in rects:
+        bands = min(rect.height, -(-rect.samples // most))
+        edges = [rect.row0 + rect.height * k // bands for k in range(bands + 1)]
+        out += [Rect(top, bottom, rect.col0, rect.col1, rect.spp)
+                for top, bottom in zip(edges, edges[1:])]
+    return out
+
+
+class BudgetPacer:
+    """Keeps a sequence of renders inside a time budget.
+
+    Render ``k`` was planned to take ``overhead`` seconds (a Cycles render's fixed cost) plus
+    ``sample_seconds[k]`` (its samples). Before it starts, ``scale(time_left)`` says by how
+    much to scale its samples so that the renders still to come fit in the time left (as
+    the caller's clock reads it): slower than planned, fewer samples for the rest; faster,
+    more, at most ``max_scale`` times the plan.
+    """
+
+    def __init__(self, sample_seconds: list[float], overhead: float, max_scale: float = 2.0):
+        if any(seconds < 0 for seconds in sample_seconds) or overhead < 0:
+            raise ValueError("planned seconds must not be negative")
+        self._left = list(sample_seconds)
+        self.overhead = overhead
+        self.max_scale = max_scale
+
+    def scale(self, time_left: float) -> float:
+        """Scale for the next render's samples; call once per render, in order."""
+        if not self._left:
+            raise IndexError("every planned render has been paced")
+        renders, planned = len(self._left), sum(self._left)
+        self._left.pop(0)
+        if planned <= 0.0:
+            return 1.0
+        usable = time_left - self.overhead * renders
+        return float(min(self.max_scale, max(0.0, usable / planned)))

@@ -1,0 +1,89 @@
+"""The guided render against what Cycles renders: passes of two seeds merge into an unbiased estimate with the noise of their summed samples,
+the time budget is kept, the ceiling obeyed, the scene restored."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fog_scene import build_fog_scene
+
+from xsl_render.addon.cycles.guided_render import render_guided
+from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+from xsl_render.addon.scene.state import preserved_scene, settings_dump
+from xsl_render.core.sampling.guided_plan import GuidedOptions
+from xsl_render.core.sampling.pass_merge import PassAccumulator
+from xsl_render.core.sampling.render_options import RenderOptions
+
+pytestmark = [pytest.mark.blender, pytest.mark.render]
+
+W, H = 64, 36
+
+
+@pytest.fixture
+def fog(blender):
+    return build_fog_scene(blender, W, H)
+
+
+def _renders(scene, seed: int, *samples: int):
+    """Whole-frame renders of one renderer (one seed), with guides."""
+    with preserved_scene(scene), CyclesWindowRenderer(scene, seed, guides=True) as renderer:
+        return [renderer.render(None, count) for count in samples]
+
+
+def _merge(*pieces) -> tuple[np.ndarray, np.ndarray]:
+    image, guides = PassAccumulator(W, H, 4), PassAccumulator(W, H, 6)
+    for piece in pieces:
+        image.add(None, piece.pixels, piece.samples)
+        guides.add(None, piece.guides, piece.samples)
+    return image.result(), guides.result()
+
+
+def test_a_reduced_render_is_the_frame_at_a_fraction_of_its_resolution(fog):
+    before = settings_dump(fog)
+    with preserved_scene(fog), CyclesWindowRenderer(fog, 3, guides=True) as renderer:
+        small = renderer.render(None, 16, reduce=4)
+        full = renderer.render(None, 16)
+    assert small.pixels.shape == (H // 4, W // 4, 4) and small.guides.shape == (H // 4, W // 4, 6)
+    assert full.pixels.shape == (H, W, 4)
+    # The same picture: the full render box-filtered to the small size matches it to noise.
+    pooled = full.pixels[:H // 4 * 4, :W // 4 * 4].reshape(H // 4, 4, W // 4, 4, 4).mean(axis=(1, 3))
+    assert abs(pooled.mean() - small.pixels.mean()) < 0.1 * pooled.mean()
+    assert np.corrcoef(pooled[..., :3].ravel(), small.pixels[..., :3].ravel())[0, 1] > 0.8
+    assert settings_dump(fog) == before
+
+
+def test_passes_of_two_seeds_merge_into_one_estimate(fog):
+    # 2 samples of seed 1 and 14 of seed 2, merged by sample count, against 16-sample
+    # renders of seeds 3 and 4: no bias, and the noise of 16 samples (an unweighted mean of
+    # the two passes would have ~1.3x the deviation).
+    (two,), (fourteen,) = _renders(fog, 1, 2), _renders(fog, 2, 14)
+    merged, _ = _merge(two, fourteen)
+    (reference,), (other,) = _renders(fog, 3, 16), _renders(fog, 4, 16)
+    difference = (merged - reference.pixels)[..., :3].ravel()
+    spread = np.std(difference) / np.sqrt(difference.size)
+    assert abs(difference.mean()) < 4 * spread
+    deviation = np.median(np.abs(difference))
+    baseline = np.median(np.abs((other.pixels - reference.pixels)[..., :3]))
+    assert 0.85 < deviation / baseline < 1.15
+    unweighted = np.median(np.abs(((two.pixels + fourteen.pixels) / 2 - reference.pixels)[..., :3]))
+    assert unweighted / baseline > 1.15                     # the test can tell the weighting
+
+
+def test_guided_render_keeps_its_time_budget(fog):
+    budget = 4.0
+    outcome = render_guided(fog, RenderOptions(max_spp=64, resolution=(96, 54)),
+                            GuidedOptions(time_budget=budget, tile_size=16))
+    stats = outcome.stats
+    assert 0.9 * budget <= stats["wall_s"] <= 1.1 * budget
+    assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
+    assert stats["final_pass"]["renders"] >= 2
+    assert outcome.samples.min() >= 1 and stats["pilot_spp"] >= 1
+    assert outcome.samples.max() > outcome.samples.min()    # the samples went somewhere
+    assert np.isfinite(outcome.image).all() and outcome.image.shape == (54, 96, 4)
+
+
+def test_guided_render_obeys_its_ceiling_and_restores_the_scene(fog):
+    before = settings_dump(fog)
+    outcome = render_guided(fog, RenderOptions(max_spp=8), GuidedOptions(time_budget=6.0, max_spp=8))
+    assert outcome.samples.max() <= 8
+    assert outcome.stats["wall_s"] < 6.0                    # done when every pixel has its 8
+    assert settings_dump(fog) == before
