@@ -186,7 +186,7 @@ def test_demo_end_to_end(tmp_path):
     (("experiment", "--resolution", "12by4"), "argument --resolution: must look like"),
     (("experiment", "--resolution", "64x36", "--size", "64"), "not both"),
     (("experiment", "--seed", "7"), "contestant seed 7 is the converged reference's seed"),
-    (("experiment", "--reference-spp", "0"), "--reference-spp must be at least 1"),
+    (("experiment", "--reference-spp", "0"), "--reference-spp: must be a whole number from 1 to 16777216"),
     (("demo", "--scene", "README.md"), "not a .blend file"),
 ])
 def test_bad_input_is_one_line(args, message):
