@@ -100,6 +100,31 @@ def test_the_table_is_large_and_covers_every_subcommand():
     assert covered >= {command.NAME for command in COMMANDS}
 
 
+#: The bad inputs issue 15 names, point by point, as cases of the table. Its other points
+#: have tests of their own (test_compare_cli, test_sigint, test_temporaries, test_batch_scene,
+#: test_experiment_server, test_experiment_analyse: their docstrings say which point).
+ISSUE_15 = {
+    1: ["compare-exposure-huge", "e2e-compare-exposure"],
+    3: ["ro-maps", "maps-out-proc", "xmap-out-file", "render-out-folder", "ro-render-out",
+        "ro-compare-json", "ro-compare-heatmap", "ro-compare-heatmap-dir", "ro-hotspots", "ro-analyse-chart",
+        "ro-farm", "render-stats-folder"],
+    4: ["render-max-spp-32bit", "render-seed-40bit", "render-frame-32bit", "maps-frame-32bit",
+        "xmap-frame-32bit", "farm-max-spp-huge", "e2e-farm-max-spp", "render-spp-above-max"],
+    5: ["maps-res-huge", "render-res-huge", "e2e-render-res-huge", "maps-res-1x1", "render-res-1x1"],
+    6: ["render-budget-nan", "render-budget-text", "unreadable-info", "unreadable-render-scene",
+        "unreadable-compare", "unreadable-budget"],
+    7: ["hotspots-distance-nan", "hotspots-width-nan", "hotspots-distance-inf", "e2e-hotspots-nan",
+        "analyse-tolerance-nan"],
+}
+
+
+@pytest.mark.parametrize("point", sorted(ISSUE_15))
+def test_issue_15_point_is_in_the_table(point):
+    """Every bad input of the issue's point is a case of the table (which runs it)."""
+    ids = {case[0] for case in CASES + UNPRIVILEGED + END_TO_END}
+    assert set(ISSUE_15[point]) <= ids, set(ISSUE_15[point]) - ids
+
+
 def _run_in_process(argv: list[str], cwd: Path, capfd, monkeypatch) -> tuple[int, str, str]:
     monkeypatch.chdir(cwd)
     monkeypatch.setitem(sys.modules, "bpy", None)       # `import bpy` now fails: no case may load Blender
