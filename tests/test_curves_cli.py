@@ -38,19 +38,23 @@ def test_the_plan_at_a_ceiling_of_64():
     assert [c.params["spp"] for c in plan if c.curve == "guiding"] == [16, 32, 64]
     for director in ("xs", "xsl"):
         assert [c.params["max_spp"] for c in plan if c.curve == director] == [16, 32, 64, 128]
-    assert all(c.time_of is None for c in plan)
+    for curve, importance in (("guided", "none"), ("guided_xsl", "xsl")):
+        points = [c for c in plan if c.curve == curve]
+        assert [c.time_of for c in points] == [f"uniform_{n}spp" for n in (8, 16, 32, 64)]
+        assert all(c.kind == "guided" and c.params == {"importance": importance} for c in points)
+    assert all(c.time_of is None for c in plan if c.kind != "guided")
 
 
 def test_a_time_matched_mode_is_one_registration(monkeypatch):
-    """How the guided sampler joins: one curve here (and one renderer on the Blender side)."""
+    """How a time-budgeted mode joins: one curve here (and one renderer on the Blender side)."""
     monkeypatch.setattr("xsl_render.core.validation.contestants.CURVES", list(CURVES))
-    register_curve(time_matched_curve("guided", "guided sampler"))
-    plan = plan_contestants(64, parse_curves("guided"))
-    guided = [c for c in plan if c.curve == "guided"]
-    assert [c.time_of for c in guided] == ["uniform_8spp", "uniform_16spp", "uniform_32spp", "uniform_64spp"]
+    register_curve(time_matched_curve("guided", "guided sampler", (1 / 4, 1), curve="guided_quick"))
+    plan = plan_contestants(64, parse_curves("guided_quick"))
+    guided = [c for c in plan if c.curve == "guided_quick"]
+    assert [c.time_of for c in guided] == ["uniform_16spp", "uniform_64spp"]
     assert all(c.kind == "guided" for c in guided)
     assert plan[-len(guided):] == guided                    # after the runs they take their time from
-    assert {c.curve for c in plan} == {"uniform", "guided"}  # uniform always comes along
+    assert {c.curve for c in plan} == {"uniform", "guided_quick"}   # uniform always comes along
 
 
 @pytest.mark.parametrize("text, message", [("bogus", "unknown curve 'bogus'"), (",", "--curves is empty")])
@@ -82,12 +86,12 @@ def read(out) -> dict:
 def test_every_curve_and_speedup_in_curves_json(curves):
     out, result = curves
     data = read(out)
-    assert list(data["curves"]) == ["uniform", "adaptive", "guiding", "xs", "xsl"]
-    assert [data["curves"][c]["baseline"] for c in data["curves"]] == [True, True, False, False, False]
+    assert list(data["curves"]) == ["uniform", "adaptive", "guiding", "xs", "xsl", "guided", "guided_xsl"]
+    assert [data["curves"][c]["baseline"] for c in data["curves"]] == [True, True] + [False] * 5
     assert data["curves"]["uniform"]["points"] == ["uniform_1spp", "uniform_2spp", "uniform_4spp", "uniform_8spp"]
     assert data["reference"]["inputs"]["spp"] == 64 and data["reference"]["inputs"]["seed"] == 7
     assert data["ceiling"] == 8 and data["scene"]["size"] == [W, H] and data["seeds"] == [0]
-    assert data["rendered"] == len(data["runs"]) == 4 + 3 + 3 + 4 + 4
+    assert data["rendered"] == len(data["runs"]) == 4 + 3 + 3 + 4 + 4 + 4 + 4
     assert data["runs"]["uniform_8spp"]["gold"] and "(gold)" in data["runs"]["uniform_8spp"]["label"]
     for name, run in data["runs"].items():
         assert run["seconds"] > 0 and run["flip"] > 0 and run["mse"] > 0 and run["jod"] is None
@@ -104,6 +108,9 @@ def test_every_curve_and_speedup_in_curves_json(curves):
                     assert speedup["faster"] == (speedup["value"] > 1)
                     assert speedup["value"] == pytest.approx(speedup["time_to_reach_s"] / run["seconds"])
     assert data["runs"]["xsl_8"]["repeats"][0]["stats"]["phases_s"]["maps"] > 0      # maps in the time
+    guided = data["runs"]["guided_xsl_at_uniform_8spp"]["repeats"][0]["stats"]
+    assert guided["phases_s"]["maps"] > 0 and guided["guided"]["importance"] == "xsl"
+    assert guided["time_budget_s"] == pytest.approx(data["runs"]["uniform_8spp"]["seconds"])
     assert data["runs"]["adaptive_0.1"]["params"] == {"noise_threshold": 0.1, "max_spp": 32}
     effect = data["runs"]["guiding_8spp"]["repeats"][0]["stats"]["path_guiding"]["effect"]
     assert effect.startswith("used")          # Cycles really guided: the image differs from uniform

@@ -38,8 +38,10 @@ _SYNC_WINDOW = 8
 #: guides written and read back; 2 cores).
 _RENDER_OVERHEAD_S = 0.008
 #: The final denoise is guessed from the frame's pixels (road: 0.25 s for 147456 pixels on
-#: 2 cores), or from the pilot's denoise when that took longer (a loaded machine).
+#: 2 cores), or, when that says more (small frames, a loaded machine), from the pilot's:
+#: measured at 128x72, the full frame's took 3-3.5x its quarter-resolution pilot's.
 _DENOISE_SECONDS_PER_PIXEL = 1.7e-6
+_DENOISE_RATIO = 3.5
 #: The pilot's sample cap and resolution divisor: 4 spp at a quarter of the resolution scored
 #: the tiles as well as more did on the road scene, for ~1/64 of a 16-spp render's samples.
 _PILOT_MAX_SPP = 16
@@ -158,7 +160,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
 
             # The final pass: planned for the time left once the final denoise is set aside,
             # then planned again with each of its renders' fixed cost set aside too.
-            denoise_reserve = max(reserve, scoring_denoise) if options.denoise else 0.0
+            denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0
             left = budget - clock.now() - denoise_reserve
             final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate)
             final = plan_final_pass(scores, weights, width, height, guided,

@@ -19,10 +19,7 @@ sync, renders, compositing, denoising; writing its files afterwards is not count
 
 Adding a kind: a function ``(scene, contestant, options, budget_s, progress) ->
 RenderOutcome`` in ``RENDERERS`` (``budget_s`` is the time budget of a contestant with
-``time_of``, else None)::
-
-    RENDERERS["guided"] = lambda scene, c, options, budget_s, progress: \\
-        render_guided(scene, options, budget_s, progress=progress)
+``time_of``, else None), as ``_guided`` is.
 """
 from __future__ import annotations
 
@@ -94,12 +91,34 @@ def _selective(scene, contestant: Contestant, options: RenderOptions, budget_s, 
     return outcome
 
 
+def _guided(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
+    """The guided render in ``budget_s`` seconds, its importance map (when it has one)
+    computed here inside the budget, as ``xsl-render render --mode guided`` does."""
+    from ...core.sampling.guided_plan import GuidedOptions
+    from ..cycles.guided_render import render_guided
+    from ..maps.director_maps import named_map
+
+    guided = GuidedOptions(time_budget=float(budget_s),
+                           importance=contestant.params.get("importance", "none")).check()
+    importance, map_seconds = None, 0.0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if guided.importance != "none":
+            started = time.perf_counter()
+            importance = named_map(scene, guided.importance, MapOptions(), options.resolution)
+            map_seconds = time.perf_counter() - started
+        outcome = render_guided(scene, options, guided, importance, map_seconds, progress)
+    outcome.warnings += [str(w.message) for w in caught]
+    return outcome
+
+
 RENDERERS: dict[str, Renderer] = {
     "uniform": _uniform,
     "adaptive": _adaptive,
     "guiding": _guiding,
     "xs": _selective,
     "xsl": _selective,
+    "guided": _guided,
 }
 
 

@@ -115,7 +115,7 @@ def _selective(director: str) -> Callable[[int], list[Contestant]]:
 
 
 def time_matched_curve(kind: str, label: str, fractions: tuple[float, ...] = TIME_MATCHED_FRACTIONS,
-                       curve: str | None = None) -> CurveSpec:
+                       curve: str | None = None, params: dict | None = None) -> CurveSpec:
     """A curve of a time-budgeted mode rendered at the times uniform sampling took at
     ``fractions`` of the ceiling (default 1/8 .. 1x: 8/16/32/64 spp for a ceiling of 64).
 
@@ -128,7 +128,8 @@ def time_matched_curve(kind: str, label: str, fractions: tuple[float, ...] = TIM
         budgets = [b for b in uniform_budgets(ceiling)
                    if any(b == max(1, round(ceiling * f)) for f in fractions)]
         return [Contestant(f"{name}_at_uniform_{spp}spp", name, kind,
-                           f"{label}, uniform {spp} spp's time", {}, time_of=f"uniform_{spp}spp")
+                           f"{label}, uniform {spp} spp's time", dict(params or {}),
+                           time_of=f"uniform_{spp}spp")
                 for spp in budgets]
     return CurveSpec(name, label, points)
 
@@ -139,6 +140,11 @@ CURVES: list[CurveSpec] = [
     CurveSpec("guiding", "Cycles path guiding", _guiding),
     CurveSpec("xs", "XS", _selective("xs")),
     CurveSpec("xsl", "XSL", _selective("xsl")),
+    # The time-budgeted sampler, at uniform's times: tiles scored by the pilot's gradient
+    # alone, and weighted by the XSL map as the paper's perceptual importance.
+    time_matched_curve("guided", "guided", params={"importance": "none"}),
+    time_matched_curve("guided", "guided, XSL importance", curve="guided_xsl",
+                       params={"importance": "xsl"}),
 ]
 
 

@@ -31,7 +31,7 @@ METRICS = ("flip", "mse", "jod")
 #: Statistics of a render kept with each repeat in curves.json.
 STATS_KEPT = ("mode", "wall_s", "phases_s", "total_samples", "mean_spp", "renders", "max_spp",
               "noise_threshold", "time_budget_s", "stopped_by_time", "ideal_speedup",
-              "director_map_mean", "path_guiding")
+              "director_map_mean", "path_guiding", "guided", "pilot_spp")
 
 
 def metric_values(metrics: dict) -> dict[str, float | None]:
