@@ -92,7 +92,8 @@ def road(blender, addon, tmp_path):
      "--stats", "{tmp}/s.json", "--save-maps", "{tmp}/sm", "--quiet"],
     ["render", "--mode", "uniform", "--spp", "2", "--max-spp", "4", "--frames", "1-2",
      "--out", "{tmp}/u_#.exr", "--quiet"],
-], ids=["info", "xmap", "maps", "gold", "xsl", "frames"])
+    ["render", "--mode", "guided", "--time-budget", "1", "--frame", "3", "--out", "{tmp}/t.exr", "--quiet"],
+], ids=["info", "xmap", "maps", "gold", "xsl", "frames", "guided"])
 def test_batch_leaves_the_scene_as_it_was(addon, road, tmp_path, capfd, command):
     before = scene_dump(road)
     assert addon.batch([arg.format(tmp=tmp_path) for arg in command]) == 0
