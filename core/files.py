@@ -1,50 +1,120 @@
-"""Atomic file writes: a temporary name in the same folder, renamed into place (one file, or
-a set of files that belong together)."""
+"""Atomic file writes: a temporary name in the same folder, renamed into place; and sets of
+files that appear together or not at all."""
 from __future__ import annotations
 
 import hashlib
 import json
 import os
-import tempfile
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
+
+from . import temporaries
+
+
+class _OutputSet:
+    """Files written (``atomic_path``) while the set is open: renamed into place together."""
+
+    def __init__(self):
+        self.staged: dict[Path, Path] = {}      # real path -> its temporary
+        self.made: list[Path] = []              # folders made for them
+
+    def stage(self, tmp: Path, path: Path) -> None:
+        earlier = self.staged.pop(path, None)
+        if earlier is not None:                 # written twice: the last one counts
+            temporaries.discard(earlier)
+        self.staged[path] = tmp
+
+    def commit(self, seal: bool) -> None:
+        with temporaries.gate():
+            for path in self.staged:
+                if path.is_dir():       # checked before any rename: the set stays whole
+                    raise IsADirectoryError(f"cannot write {path}: a folder has that name")
+            for path, tmp in self.staged.items():
+                os.replace(tmp, path)
+                temporaries.forget(tmp)
+            if seal:
+                temporaries.seal()
+
+    def discard(self) -> None:
+        for tmp in self.staged.values():
+            temporaries.discard(tmp)
+        temporaries.remove_empty(self.made)
+
+
+_open_sets: list[_OutputSet] = []
+
+
+@contextmanager
+def output_set(seal: bool = False, own: bool = False):
+    """Every file written through :func:`atomic_path` inside the block appears when the block
+    ends without an error, all at once (one rename each, under ``temporaries.gate``), or not
+    at all. A block inside another one joins it, unless ``own``: then its files appear at its
+    own end (finished work that outlives the command, such as a cache entry). ``seal``: these
+    are the command's last outputs, so a cancel after them is too late (``temporaries.seal``)."""
+    if _open_sets and not own:
+        yield
+        return
+    current = _OutputSet()
+    _open_sets.append(current)
+    try:
+        yield
+    except BaseException:
+        _open_sets.pop()
+        current.discard()
+        raise
+    _open_sets.pop()
+    try:
+        current.commit(seal)
+    except BaseException:
+        current.discard()
+        raise
 
 
 @contextmanager
 def atomic_path(path: str | os.PathLike):
     """Yield a temporary path next to ``path`` (same extension); rename it into place on
-    success, delete it on failure or cancel, so no half-written file ever has the real name."""
+    success (at the end of the enclosing :func:`output_set`, if any), delete it on failure or
+    cancel, so no half-written file ever has the real name."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}",
-                               dir=path.parent)
-    os.close(fd)
-    # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-    os.chmod(tmp, 0o666 & ~_umask())
+    made = temporaries.make_folders(path.parent)
+    temporaries.sweep(path.parent)
+    tmp = temporaries.new_file(path)      # mode 0o666 under the umask, as open() makes it
     try:
-        yield Path(tmp)
-        os.replace(tmp, path)
+        yield tmp
     except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        temporaries.discard(tmp)
+        if _open_sets:
+            _open_sets[-1].made += made
+        else:
+            temporaries.remove_empty(made)
+        raise
+    if _open_sets:
+        _open_sets[-1].made += made
+        _open_sets[-1].stage(tmp, path)
+        return
+    try:
+        with temporaries.gate():
+            os.replace(tmp, path)
+            temporaries.forget(tmp)
+    except BaseException:
+        temporaries.discard(tmp)
+        temporaries.remove_empty(made)
         raise
 
 
 @contextmanager
 def atomic_paths(*paths: str | os.PathLike):
     """``atomic_path`` for a set of files that belong together: yield one temporary path per
-    file; only once every one is written are they renamed into place, the last path named
-    last (so a record naming the others goes last); on failure or cancel none is."""
-    with ExitStack() as stack:
-        # Exit order is the reverse of entry: enter the last path first, rename it last.
-        temporaries = [stack.enter_context(atomic_path(path)) for path in reversed(paths)]
-        yield temporaries[::-1]
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    file, each written in place (``atomic=False``); once every one is written they are renamed
+    into place as a set of their own (:func:`output_set`), the last path named last (so a
+    record naming the others goes last); on failure or cancel none is. Their own, even inside
+    a command's set: what uses this (a cache entry, a farm frame) is read back by the same
+    command, and a later run reuses it."""
+    with output_set(own=True), ExitStack() as stack:
+        # Exits run in reverse order of entry: entering the last path first stages it last,
+        # and a set renames in the order its files were staged.
+        names = [stack.enter_context(atomic_path(path)) for path in reversed(paths)]
+        yield names[::-1]
 
 
 def write_text(path: str | os.PathLike, text: str, atomic: bool = True) -> Path:
@@ -60,30 +130,6 @@ def write_text(path: str | os.PathLike, text: str, atomic: bool = True) -> Path:
 
 def write_json(path: str | os.PathLike, data, atomic: bool = True) -> Path:
     return write_text(path, json.dumps(data, indent=2) + "\n", atomic)
-
-
-def check_output_path(path: str | os.PathLike, suffix: str) -> Path:
-    """Check, before any work is done, that ``path`` can be written as a ``suffix`` file.
-
-    Raises InputError (one line) when the name has another extension, names a folder, or
-    its folder cannot be created or written. The folder itself is created at write time
-    (:func:`atomic_path`), so nothing is left behind by a command that fails later.
-    """
-    from .errors import InputError
-
-    path = Path(path)
-    if path.is_dir():
-        raise InputError(f"output {path} is a folder, not a file")
-    if path.suffix.lower() != suffix.lower():
-        raise InputError(f"output {path} must be a {suffix} file")
-    folder = path.parent.absolute()
-    while not folder.exists():
-        folder = folder.parent
-    if not folder.is_dir():
-        raise InputError(f"cannot write {path}: {folder} is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise InputError(f"cannot write {path}: folder {folder} is not writable")
-    return path
 
 
 def file_sha256(path: str | os.PathLike) -> str:

@@ -12,18 +12,20 @@ from __future__ import annotations
 
 import re
 
+from .checks import MAX_FRAME, MIN_FRAME
 from .errors import InputError
 
 EXTENSION = ".exr"
 #: Digits Blender pads an appended frame number to.
 DEFAULT_DIGITS = 4
-_RANGE = re.compile(r"^\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*(?::\s*(\d+)\s*)?)?$")
+_RANGE = re.compile(r"^\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*(?::\s*(\d+)\s*)?)?\Z")
 
 
 def parse_frame_range(text: str) -> range:
     """``"1-48"``, ``"1..48"``, ``"1-48:2"`` (every 2nd frame) or ``"7"`` -> a range of frames.
 
-    Raises InputError for anything else, an end before the start or a step below 1.
+    Raises InputError for anything else, an end before the start, a step below 1 or a frame
+    Blender cannot go to.
     """
     match = _RANGE.match(str(text))
     if not match:
@@ -35,6 +37,9 @@ def parse_frame_range(text: str) -> range:
         raise InputError(f"--frames {text}: the end frame {end} is before the start frame {start}")
     if step < 1:
         raise InputError(f"--frames {text}: the step must be at least 1")
+    if not (MIN_FRAME <= start and end <= MAX_FRAME and step <= MAX_FRAME - MIN_FRAME):
+        raise InputError(f"--frames {text}: frames must lie between {MIN_FRAME} and {MAX_FRAME} "
+                         "(Blender's limits)")
     return range(start, end + 1, step)
 
 

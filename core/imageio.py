@@ -71,7 +71,8 @@ def image_is_float(path: str | os.PathLike) -> bool:
     by convention scene-linear, where 8- and 16-bit integer files are display-referred."""
     image = oiio.ImageInput.open(str(path))
     if image is None:
-        raise InputError(f"cannot read image {path}")
+        reason = oiio.geterror().strip().splitlines()
+        raise InputError(f"cannot read image {path}: {reason[0] if reason else 'unknown format'}")
     try:
         return image.spec().format.basetype in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE)
     finally:
@@ -97,9 +98,12 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: list[st
     """Write a float32 OpenEXR (ZIP compressed) atomically.
 
     A 2-D array becomes one channel named ``Y``. Refuses NaN and Inf: a map with them
-    is a bug upstream and must not reach a file. ``atomic=False`` writes ``path`` itself:
-    only for a path that is already a temporary (``core.files.atomic_paths``).
+    is a bug upstream and must not reach a file; and a name without ``.exr``, under which
+    OpenImageIO would write another format. ``atomic=False`` writes ``path`` itself: only for
+    a path that is already a temporary (``core.files.atomic_paths``).
     """
+    if Path(path).suffix.lower() != ".exr":
+        raise ValueError(f"write_exr writes OpenEXR files; {path} does not end in .exr")
     data = np.ascontiguousarray(_as_hwc(array), dtype=np.float32)
     if not np.isfinite(data).all():
         raise ValueError(f"refusing to write NaN or Inf to {path}")

@@ -117,5 +117,10 @@ def standard_view(hdr_rgb: np.ndarray, exposure_ev: float = 0.0) -> np.ndarray:
     hdr_rgb : (H, W, C) scene-linear radiance (Rec.709 primaries, as Cycles writes).
     exposure_ev : exposure in stops applied before the clamp.
     """
-    scaled = np.asarray(hdr_rgb, dtype=np.float32) * np.float32(2.0 ** exposure_ev)
+    # The factor stays a finite float32 however large the exposure (0 * inf would be NaN);
+    # what it sends past float32's range is white after the clamp anyway.
+    factor = np.float32(min(2.0 ** float(np.clip(exposure_ev, -1000.0, 1000.0)),
+                            float(np.finfo(np.float32).max)))
+    with np.errstate(over="ignore"):
+        scaled = np.asarray(hdr_rgb, dtype=np.float32) * factor
     return linear_to_srgb(scaled)

@@ -1,8 +1,20 @@
-"""The ``xsl-render`` command: parse, call, report.
+"""The ``xsl-render`` command: parse, check, call, report.
 
 Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(parser)`` and
-``run(args) -> int``. Exit codes: 0 success, 2 bad input (one line on stderr, no traceback),
-1 an unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
+``run(args) -> int``, and optionally:
+
+- ``check(args)``: what relates several options, raising InputError; it runs once every
+  option was checked on its own (``commands/argtypes.py``) and before ``run``, so a bad
+  input is refused before Blender loads or anything is written;
+- ``OUTPUTS_AS_A_SET`` (default True), or ``outputs_as_a_set(args)`` where it depends on the
+  options: every file the command writes appears at its end, all at once, or not at all
+  (``core.files.output_set``). False for commands that keep finished work as they go (an
+  animation, the validation, farm tasks);
+- ``INTERRUPTIBLE`` (default False): Ctrl-C raises KeyboardInterrupt in the command (a server
+  that shuts down cleanly) instead of cancelling it (``signals.py``).
+
+Exit codes: 0 success, 2 bad input (one line on stderr, no traceback), 130 cancelled (143 for
+SIGTERM), 1 an unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
 """
 from __future__ import annotations
 
@@ -10,16 +22,25 @@ import argparse
 import os
 import sys
 import traceback
+from contextlib import nullcontext
 
 from ..core.errors import InputError
+from ..core.files import output_set
+from .commands.argtypes import register_safe_numbers
 from .console import blender_chatter_to_log
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """argparse that reports a usage error as one line and exit code 2."""
+    """argparse that reports a usage error as one line and exit code 2, and whose plain
+    ``type=int`` / ``type=float`` refuse what Blender cannot hold (NaN, inf, past 32 bits)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        register_safe_numbers(self)
 
     def error(self, message: str):  # noqa: D401 - argparse API
-        raise InputError(f"{self.prog}: {message}")
+        command = self.prog.removeprefix("xsl-render").strip()
+        raise InputError(f"{command + ': ' if command else ''}{message} (see {self.prog} --help)")
 
 
 def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
@@ -38,22 +59,52 @@ def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
         child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
         child.in_blender = in_blender          # read by commands.common.add_scene_positional
         command.add_arguments(child)
-        child.set_defaults(run=command.run)
+        child.set_defaults(run=command.run, command=command)
     return parser
 
 
-def main(argv: list[str] | None = None, in_blender: bool = False) -> int:
+class _Failed(Exception):
+    """``run`` returned a non-zero code: its outputs are discarded like an error's."""
+
+    def __init__(self, code: int):
+        super().__init__(code)
+        self.code = code
+
+
+def _outputs_as_a_set(command, args) -> bool:
+    if hasattr(command, "outputs_as_a_set"):
+        return bool(command.outputs_as_a_set(args))
+    return bool(getattr(command, "OUTPUTS_AS_A_SET", True))
+
+
+def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
+    """Run one command; ``watcher``: the command line's signal watcher (``signals.py``)."""
     argv = sys.argv[1:] if argv is None else argv
     try:
         args = build_parser(in_blender).parse_args(argv)
     except InputError as error:
-        print(f"{error} (see --help)", file=sys.stderr)
+        print(f"xsl-render: error: {error}", file=sys.stderr)
         return 2
     except SystemExit as done:          # --help
         return int(done.code or 0)
+    command = args.command
+    try:
+        if hasattr(command, "check"):
+            command.check(args)
+    except InputError as error:
+        print(f"xsl-render: error: {error}", file=sys.stderr)
+        return 2
+    if watcher is not None and getattr(command, "INTERRUPTIBLE", False):
+        watcher.interrupt_main = True
+    outputs = output_set(seal=True) if _outputs_as_a_set(command, args) else nullcontext()
     with blender_chatter_to_log(keep=args.verbose) as log_path:
         try:
-            code = args.run(args)
+            with outputs:
+                code = args.run(args)
+                if code:
+                    raise _Failed(code)
+        except _Failed as failed:
+            code = failed.code
         except InputError as error:
             print(f"xsl-render: error: {error}", file=sys.stderr)
             code = 2
@@ -70,21 +121,3 @@ def main(argv: list[str] | None = None, in_blender: bool = False) -> int:
         if args.verbose:
             print(f"xsl-render: Blender's console output is in {log_path}", file=sys.stderr)
     return code
-
-
-def entry() -> None:
-    code = main()
-    # Blender prints its own report at interpreter exit (e.g. "Error: Not freed memory
-    # blocks" after the denoiser's temporary images) straight to fd 1: after our last line,
-    # which commands promise is theirs (demo prints the report's path last). Our output is
-    # flushed; what Blender says from here on goes nowhere.
-    sys.stdout.flush()
-    sys.stderr.flush()
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, 1)
-    os.dup2(devnull, 2)
-    sys.exit(code)
-
-
-if __name__ == "__main__":
-    entry()

@@ -12,17 +12,21 @@ import sys
 import tempfile
 from contextlib import contextmanager
 
+from ..core import temporaries
+
 
 @contextmanager
 def blender_chatter_to_log(keep: bool = False):
     """Redirect fd 1 and 2 to a log file for the duration; yields the log's path.
 
-    ``keep`` leaves the log on disk afterwards (``--verbose``); otherwise it is deleted.
+    ``keep`` leaves the log on disk afterwards (``--verbose``), in the system's temporary
+    folder rather than the command's own, which goes at its end; otherwise it is deleted.
     """
     sys.stdout.flush()
     sys.stderr.flush()
     saved_out, saved_err = os.dup(1), os.dup(2)
-    fd, log_path = tempfile.mkstemp(prefix="xsl-render-", suffix=".log")
+    folder = temporaries.system_tempdir() if keep else None
+    fd, log_path = tempfile.mkstemp(prefix="xsl-render-", suffix=".log", dir=folder)
     old_stdout, old_stderr = sys.stdout, sys.stderr
     try:
         os.dup2(fd, 1)

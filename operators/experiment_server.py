@@ -34,6 +34,13 @@ PAGE_FILES = {
     "/experiment.css": ("experiment.css", "text/css; charset=utf-8"),
 }
 MAX_BODY_BYTES = 64 * 1024
+#: Seconds a connection may stay silent (a request line, headers, a body shorter than its
+#: Content-Length) before its thread gives up on it.
+REQUEST_TIMEOUT_S = 10.0
+#: How deeply a request's JSON may nest: the page sends two levels.
+MAX_JSON_DEPTH = 8
+#: Digits an integer in a request may have: the page's time stamps are milliseconds.
+MAX_INT_DIGITS = 18
 
 
 class ExperimentServer(ThreadingHTTPServer):
@@ -44,7 +51,8 @@ class ExperimentServer(ThreadingHTTPServer):
     store: ExperimentStore
 
     def __init__(self, address: tuple[str, int], pairs: list[StimulusPair],
-                 conditions: tuple[str, ...], log=None):
+                 conditions: tuple[str, ...], log=None, request_timeout: float = REQUEST_TIMEOUT_S):
+        self.request_timeout = request_timeout
         self.pairs = {pair.scene: pair for pair in pairs}
         self.conditions = conditions
         self.log = log or sys.stdout
@@ -118,6 +126,10 @@ class ExperimentHandler(BaseHTTPRequestHandler):
     server: ExperimentServer
     server_version = "xsl-render-experiment"
 
+    def setup(self) -> None:
+        self.timeout = self.server.request_timeout   # StreamRequestHandler sets it on the socket
+        super().setup()
+
     def log_message(self, format, *args) -> None:   # noqa: A002 - http.server's API
         """Quiet: the server reports registrations and answers itself."""
 
@@ -146,12 +158,12 @@ class ExperimentHandler(BaseHTTPRequestHandler):
         if length <= 0 or length > MAX_BODY_BYTES:
             raise InputError(f"the request body must be 1..{MAX_BODY_BYTES} bytes of JSON")
         try:
-            data = json.loads(self.rfile.read(length))
-        except (UnicodeDecodeError, json.JSONDecodeError):
-            raise InputError("the request body is not JSON") from None
-        if not isinstance(data, dict):
-            raise InputError("the request body must be a JSON object")
-        return data
+            raw = self.rfile.read(length)
+        except TimeoutError:
+            raise InputError("the request body did not arrive in time") from None
+        if len(raw) < length:
+            raise InputError("the request body is shorter than its Content-Length")
+        return parse_body(raw)
 
     # --- routes ----------------------------------------------------------------------
     def do_HEAD(self) -> None:  # noqa: N802 - http.server's API
@@ -214,13 +226,56 @@ class ExperimentHandler(BaseHTTPRequestHandler):
         self._json(HTTPStatus.CREATED, {"stored": True, "trials_left": left})
 
 
+def parse_body(raw: bytes) -> dict:
+    """A request body as a JSON object of plain values, or InputError (the answer is 400):
+    not UTF-8, not JSON, nested deeper than the page ever sends, NaN or Infinity, integers
+    longer than a time stamp, numbers past a float's range."""
+    def refuse(text):
+        raise ValueError(f"{text} is not a number a request may hold")
+
+    def integer(text: str) -> int:
+        if len(text.lstrip("-")) > MAX_INT_DIGITS:
+            refuse("an integer of more than 18 digits")
+        return int(text)
+
+    def number(text: str) -> float:
+        value = float(text)
+        if value in (float("inf"), float("-inf")):
+            refuse(text)
+        return value
+
+    try:
+        data = json.loads(raw, parse_constant=refuse, parse_int=integer, parse_float=number)
+    except (ValueError, RecursionError):        # UnicodeDecodeError and JSONDecodeError too
+        raise InputError("the request body is not JSON a request may hold") from None
+    if not isinstance(data, dict):
+        raise InputError("the request body must be a JSON object")
+    if _depth(data) > MAX_JSON_DEPTH:
+        raise InputError("the request body is nested too deeply")
+    return data
+
+
+def _depth(value) -> int:
+    """How deeply lists and objects nest in ``value`` (counted without recursion)."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict):
+            item = list(item.values())
+        if isinstance(item, list):
+            deepest = max(deepest, depth)
+            stack.extend((child, depth + 1) for child in item)
+    return deepest
+
+
 def start_server(pairs: list[StimulusPair], db_path: Path, host: str, port: int,
-                 conditions: tuple[str, ...], log=None) -> ExperimentServer:
+                 conditions: tuple[str, ...], log=None,
+                 request_timeout: float = REQUEST_TIMEOUT_S) -> ExperimentServer:
     """Bind the server, then open the store (so a port in use leaves no database behind).
 
     Raises InputError when the port cannot be had or the database cannot be used.
     """
-    server = ExperimentServer((host, port), pairs, conditions, log)
+    server = ExperimentServer((host, port), pairs, conditions, log, request_timeout)
     try:
         server.store = ExperimentStore(db_path)
     except BaseException:

@@ -1,12 +1,16 @@
-"""Ctrl-C on the command line while Blender renders.
+"""Ctrl-C while Blender renders, where Blender owns the process (``blender -b ... x.batch()``).
 
 Blender runs a render in C and calls back into Python (Cycles' engine, status handlers);
 a KeyboardInterrupt raised there is caught and printed by Blender and the render goes on,
 and Python only runs signal handlers in the main thread once the render has returned. So the
-command line watches SIGINT through Python's wakeup file descriptor, which the C-level
-handler writes at once, from a helper thread: the first Ctrl-C asks the progress callback to
-cancel, which stops the work at the next safe point (between two tile renders, or after a
-single render) with nothing written and the scene restored; a second Ctrl-C exits at once.
+commands watch SIGINT through Python's wakeup file descriptor, which the C-level handler
+writes at once, from a helper thread: the first Ctrl-C asks the progress callback to cancel,
+which stops the work at the next safe point (between two tile renders, or after a single
+render) with nothing written and the scene restored; a second Ctrl-C exits at once.
+
+The ``xsl-render`` console script goes further (``signals.py``): SIGINT is blocked in every
+thread from its first instruction and its own watcher cancels at once, so there this context
+never sees a signal.
 """
 from __future__ import annotations
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from ..core.checks import writable_file
 from ..core.errors import InputError
 from ..core.frames import frame_path, has_frame_marker
 from ..core.maps.files import MapSet
@@ -113,10 +114,25 @@ def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = 
     return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))
 
 
-def _still_finish(scene, options, filepath: str, gold: bool):
+def still_output(filepath: str) -> str:
+    """The EXR file a still render writes (``filepath`` made absolute), checked before the
+    render: the files are EXR as ``xsl-render render`` writes them, whatever the name says
+    otherwise, so another extension is refused rather than written as EXR under it. Empty:
+    no file."""
     import bpy
 
+    if not filepath:
+        return ""
+    path = bpy.path.abspath(filepath)
+    writable_file(frame_path(path, 0) if has_frame_marker(path) else path, (".exr",),
+                  name="the output path")
+    return path
+
+
+def _still_finish(scene, options, filepath: str, gold: bool):
     from ..addon.panel.image_display import show_maps, show_render
+
+    path = still_output(filepath)
 
     def finish(result) -> JobResult:
         outcome = result.outcome
@@ -126,13 +142,11 @@ def _still_finish(scene, options, filepath: str, gold: bool):
             warnings += result.maps.info["warnings"]
         image, _ = show_render(outcome, options.max_spp, gold=gold)
         report = render_report(outcome.stats)
-        if filepath:
-            path = bpy.path.abspath(filepath)
-            if has_frame_marker(path):
-                path = frame_path(path, result.frame)
-            write_render_outputs(path, outcome.image, outcome.samples, outcome.stats,
+        if path:
+            written = frame_path(path, result.frame) if has_frame_marker(path) else path
+            write_render_outputs(written, outcome.image, outcome.samples, outcome.stats,
                                  options.max_spp, options.seed)
-            report += f" -> {path}"
+            report += f" -> {written}"
         return JobResult(report, image, warnings)
 
     return finish

@@ -11,6 +11,7 @@ import shutil
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from fog_scene import build_fog_scene
 
 from xsl_render.core.imageio import read_image
@@ -112,7 +113,7 @@ def test_batch_entry_renders_like_the_command(blender, addon, cli, foggy_animati
      "--frame and --frames cannot be combined"),
     (["render", "--mode", "xsl", "--max-spp", "4", "--out", "x.exr", "--frames", "3-1"],
      "the end frame 1 is before the start frame 3"),
-    (["render", "--mode", "xsl", "--max-spp", "4", "--out", "x.exr", "--frames", "1-2", "--maps", "m"],
+    (["render", "--mode", "xsl", "--max-spp", "4", "--out", "x.exr", "--frames", "1-2", "--maps", str(EXAMPLES)],
      "--frames computes every frame's own maps"),
     ([], "the following arguments are required: COMMAND"),
 ])

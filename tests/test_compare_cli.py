@@ -116,7 +116,7 @@ def _write_bad_inputs(kind: str, tmp_path):
 @pytest.mark.parametrize("kind, words", [
     ("missing", "no such image file"), ("size", "differ in size"), ("channels", "channel count"),
     ("nan", "NaN or Inf"), ("inf", "NaN or Inf"), ("kinds", "same kind"),
-    ("suffix", "unsupported image type"),
+    ("suffix", "cannot read image"),
 ])
 def test_bad_input_exits_2_with_one_line(cli, tmp_path, kind, words):
     ref, test = _write_bad_inputs(kind, tmp_path)
@@ -192,3 +192,77 @@ def test_errors_against_a_cycles_reference_fall_with_samples(blender, cli, tmp_p
     assert reports[4]["flip"]["mean_flip"] > reports[16]["flip"]["mean_flip"]
     if HAS_VDP:
         assert reports[4]["vdp"]["jod"] < reports[16]["vdp"]["jod"] < 10.0
+
+
+def _compare_json(capfd, tmp_path, *images, extra=()):
+    """``xsl-render compare`` in this process (the console script is tested above)."""
+    from xsl_render.operators.cli import main
+
+    out = tmp_path / "c.json"
+    capfd.readouterr()
+    assert main(["compare", *map(str, images), "--json", str(out), "--no-vdp", *extra]) == 0
+    printed = capfd.readouterr()
+    assert printed.err == "" and "nan" not in printed.out.lower()
+    return json.loads(out.read_text())
+
+
+def test_a_black_hdr_reference_and_a_huge_exposure(cli, capfd, tmp_path):
+    """Issue 15, point 1: FLIP's own exposure range fails on a black reference and used to end
+    the process (exit 255, nothing said); --exposure 1000 used to print MSE nan."""
+    black = write_exr(tmp_path / "black.exr", np.zeros((36, 64, 4), np.float32))
+    grey = write_exr(tmp_path / "grey.exr", np.full((36, 64, 4), 0.18, np.float32))
+    done = cli("compare", black, black, "--json", tmp_path / "same.json", "--no-vdp")    # the whole process
+    assert (done.returncode, done.stderr) == (0, ""), done.stderr
+    same = json.loads((tmp_path / "same.json").read_text())["metrics"]
+    assert same["flip"]["mean_flip"] == 0.0 and same["mse"]["mse"] == 0.0
+    lit = _compare_json(capfd, tmp_path, black, grey)["metrics"]
+    assert lit["flip"]["mean_flip"] > 0.5 and lit["flip"]["error_pixel_percent"] == 100.0
+    nearly = write_exr(tmp_path / "nearly.exr", np.full((36, 64, 4), 1e-30, np.float32))
+    assert _compare_json(capfd, tmp_path, nearly, black)["metrics"]["flip"]["mean_flip"] == 0.0
+    bright = _compare_json(capfd, tmp_path, grey, black, extra=("--exposure", "64"))["metrics"]
+    assert bright["mse"]["mse"] == pytest.approx(1.0)         # white against black, not NaN
+    # --exposure 1000 is refused while parsing (tests/test_fuzz_cli.py, compare-exposure-huge).
+
+
+def test_the_display_transform_never_makes_nan():
+    from xsl_render.core.tonemap import standard_view
+
+    image = np.array([[[0.0, 0.5, 1e30]]], np.float32)
+    for exposure in (-1e6, -1000.0, 0.0, 64.0, 1000.0, 1e6):
+        with np.errstate(all="raise"):
+            view = standard_view(image, exposure)
+        assert np.isfinite(view).all() and view.min() >= 0.0 and view.max() <= 1.0
+
+
+def test_hdr_or_ldr_is_read_from_the_pixels_not_the_name(cli, capfd, tmp_path):
+    """Issue 15, point 12: a float TIFF is a linear render, a PNG named .exr is display values."""
+    import OpenImageIO as oiio
+
+    rng = np.random.default_rng(3)
+    values = rng.random((24, 32, 3)).astype(np.float32)
+    write_png(tmp_path / "a.png", values)
+    (tmp_path / "a_named.exr").write_bytes((tmp_path / "a.png").read_bytes())
+    assert _compare_json(capfd, tmp_path, tmp_path / "a_named.exr", tmp_path / "a.png")["dynamic_range"] == "LDR"
+    for name, data in (("f.tif", values), ("g.tif", values * 2.0)):
+        out = oiio.ImageOutput.create(str(tmp_path / name))
+        out.open(str(tmp_path / name), oiio.ImageSpec(32, 24, 3, oiio.FLOAT))
+        out.write_image(data)
+        out.close()
+    report = _compare_json(capfd, tmp_path, tmp_path / "f.tif", tmp_path / "g.tif")
+    assert report["dynamic_range"] == "HDR" and report["metrics"]["flip"]["mode"] == "HDR-FLIP"
+    write_exr(tmp_path / "f.exr", values)
+    assert _compare_json(capfd, tmp_path, tmp_path / "f.exr", tmp_path / "f.tif")["metrics"]["flip"]["mean_flip"] == 0
+    done = cli("compare", tmp_path / "f.tif", tmp_path / "a.png", "--no-vdp")
+    assert done.returncode == 2 and "same kind" in done.stderr
+
+
+@pytest.mark.parametrize("kind", ["hdr", "ldr"])
+def test_1x1_images_compare_like_any_other(capfd, tmp_path, kind):
+    """Issue 15, point 12: two different 1x1 images differ, the same one does not."""
+    write = write_exr if kind == "hdr" else write_png
+    suffix = ".exr" if kind == "hdr" else ".png"
+    a = write(tmp_path / f"a{suffix}", np.array([[[0.2, 0.3, 0.4]]], np.float32))
+    b = write(tmp_path / f"b{suffix}", np.array([[[0.9, 0.1, 0.4]]], np.float32))
+    different = _compare_json(capfd, tmp_path, a, b)["metrics"]
+    assert different["flip"]["mean_flip"] > 0.1 and different["mse"]["mse"] > 0.01
+    assert _compare_json(capfd, tmp_path, a, a)["metrics"]["flip"]["mean_flip"] == 0.0

@@ -127,3 +127,26 @@ def test_cli_bad_input_is_exit_2(tmp_path, cli, case, paper_db):
     result = cli("experiment-analyse", db, *args, timeout=60)
     assert result.returncode == 2, result.stderr
     assert result.stderr.startswith("xsl-render: error:") and result.stderr.count("\n") == 1
+
+
+def test_the_summary_counts_every_trial_excluded_as_off_timing(tmp_path):
+    """Issue 15, point 7: a cell whose every trial was excluded left its off-timing trials out
+    of the summary, which then said "1 trials off ... 3 excluded"."""
+    from xsl_render.core.psychophysics.analysis import format_report
+
+    path = tmp_path / "a.sqlite"
+    store = ExperimentStore(path, durable=False)
+    store.sync_stimuli([StimulusPair(s, Path(f"{s}.gold.png"), Path(f"{s}.test.png"), 8, 8, "0" * 64, "1" * 64)
+                        for s in ("late", "ok")])
+    rng = random.Random(5)
+    for i in range(3):
+        plan = store.register(f"p{i}", "18-24", False, {}, ["late", "ok"], (REFERENCE,), rng)
+        answer(store, plan, "late", REFERENCE, True, 200.0)            # every one off timing
+        answer(store, plan, "ok", REFERENCE, i > 0, 100.0 if i == 0 else 0.0)
+    store.close()
+    report = analyse_answers(read_answers(path), timing_tolerance_ms=50.0, exclude_off_timing=True)
+    assert [cell["scene"] for cell in report["cells"]] == ["ok"]
+    assert report["excluded"] == 4 and report["timing"] == {"worst_error_ms": pytest.approx(200.0),
+                                                             "off_timing": 4, "page_hidden": 0}
+    summary = format_report(report).splitlines()[-1]
+    assert "worst deviation 200.0 ms" in summary and "4 trials off" in summary and "4 excluded" in summary

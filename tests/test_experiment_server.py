@@ -138,3 +138,70 @@ def test_bad_stimuli_folder_is_exit_2(tmp_path, cli, problem):
     result = cli("experiment-serve", stimuli, "--port", "0", timeout=60)
     assert result.returncode == 2
     assert result.stderr.startswith("xsl-render: error:") and result.stderr.count("\n") == 1
+
+
+def _post_raw(srv, path: str, body: bytes, length: int | None = None) -> int:
+    connection = http.client.HTTPConnection(*srv.server_address[:2], timeout=10)
+    try:
+        connection.putrequest("POST", path)
+        connection.putheader("Content-Type", "application/json")
+        connection.putheader("Content-Length", str(len(body) if length is None else length))
+        connection.endheaders(body)
+        return connection.getresponse().status
+    finally:
+        connection.close()
+
+
+@pytest.mark.parametrize("body", [
+    b"[" * 30000 + b"]" * 30000,                                         # deeper than json can parse
+    b'{"participant_id": "p9", "age_range": "18-24", "vision_corrected": true, "display": '
+    + b'{"a": ' * 20 + b"1" + b"}" * 20 + b"}",                          # nested deeper than the page sends
+    b'{"participant_id": "p9", "age_range": "18-24", "vision_corrected": NaN}',
+    b'{"participant_id": "p9", "age_range": "18-24", "vision_corrected": true, "display": {"w": 1e400}}',
+    b'{"participant_id": "p9", "n": ' + b"9" * 5000 + b"}",              # past int's text limit
+    b"\xff\xfe not utf-8",
+], ids=["nested-array", "nested-object", "nan", "float-overflow", "long-int", "bytes"])
+def test_unparsable_bodies_get_400_and_the_server_goes_on(server, body):
+    """Issue 15, point 10: these used to raise inside the handler (no answer at all)."""
+    assert _post_raw(server, "/api/participants", body) == 400
+    assert request(server, "GET", "/")[0] == 200
+
+
+def test_time_stamps_past_a_float_get_400(server):
+    status, body = request(server, "POST", "/api/participants",
+                           {"participant_id": "big1", "age_range": "18-24", "vision_corrected": True})
+    assert status == 201
+    scene = json.loads(body)["trials"][0]["scene"]
+    events = {"first_on": 0, "first_off": 4000, "second_on": 6000, "second_off": 10 ** 18}
+    raw = json.dumps({"participant_id": "big1", "scene": scene, "choice": "first", "events": events})
+    assert _post_raw(server, "/api/answers", raw.replace(str(10 ** 18), "1" + "0" * 400).encode()) == 400
+    events.update(second_off=10000, answer_at=10 ** 17)     # 18 digits: a number, if an odd one
+    status, _ = request(server, "POST", "/api/answers",
+                        {"participant_id": "big1", "scene": scene, "choice": "first", "events": events})
+    assert status == 201
+
+
+@pytest.mark.parametrize("participant_id", ["p1\n", "p1\r\n", "\np1", "p 1", "-p1", "x" * 65])
+def test_participant_ids_are_checked_to_their_last_character(server, participant_id):
+    """Issue 15, point 10: ``$`` matched before a trailing newline; ids are anchored at \\Z."""
+    status, _ = request(server, "POST", "/api/participants",
+                        {"participant_id": participant_id, "age_range": "18-24", "vision_corrected": True})
+    assert status == 400
+
+
+def test_a_body_shorter_than_its_length_gets_400_after_the_timeout(tmp_path):
+    stimuli = make_stimuli(tmp_path / "stimuli")
+    srv = start_server(scan_stimuli(stimuli), tmp_path / "a.sqlite", "127.0.0.1", 0, ("reference",),
+                       log=open(tmp_path / "server.log", "w"), request_timeout=0.5)
+    thread = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        assert _post_raw(srv, "/api/participants", b'{"participant_id": ', length=500) == 400
+        with socket.create_connection(srv.server_address[:2], timeout=10) as silent:
+            silent.sendall(b"POST /api/participants HTTP/1.1\r\n")        # and nothing more
+            assert silent.recv(100) == b""          # the server hangs up instead of waiting forever
+        assert request(srv, "GET", "/")[0] == 200
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        srv.store.close()

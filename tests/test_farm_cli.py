@@ -227,16 +227,16 @@ def test_guided_bundle_renders_every_frame_and_a_rerun_skips_them(cli, tmp_path)
 
 @pytest.mark.parametrize("command,args,message", [
     ("farm", ["--mode", "guided"], "--mode guided needs --time-budget SECONDS"),
-    ("farm", ["--mode", "guided", "--time-budget", "0"], "--time-budget must be a positive number"),
-    ("farm", ["--mode", "guided", "--time-budget", "-3"], "--time-budget must be a positive number"),
-    ("farm", ["--mode", "guided", "--time-budget", "nan"], "--time-budget must be a positive number"),
-    ("farm", ["--mode", "guided", "--time-budget", "1e9"], "is more than a week"),
+    ("farm", ["--mode", "guided", "--time-budget", "0"], "--time-budget: must be greater than 0, not 0"),
+    ("farm", ["--mode", "guided", "--time-budget", "-3"], "--time-budget: must be greater than 0, not -3"),
+    ("farm", ["--mode", "guided", "--time-budget", "nan"], "--time-budget: must be a finite number, not nan"),
+    ("farm", ["--mode", "guided", "--time-budget", "1e9"], "--time-budget: must be at most 604800"),
     ("farm", ["--mode", "guided", "--time-budget", "5", "--tasks-per-frame", "2"], "a guided frame is one task"),
     ("farm", ["--mode", "xsl", "--time-budget", "5"], "--time-budget is for --mode guided"),
     ("farm-task", ["guided", "--frame", "1", "--scene-name", "road", "--resolution", "64x36",
-                   "--time-budget", "0"], "--time-budget must be a positive number"),
+                   "--time-budget", "0"], "--time-budget: must be greater than 0, not 0"),
     ("farm-task", ["guided", "--frame", "1", "--scene-name", "road", "--resolution", "64x36",
-                   "--time-budget", "5", "--max-spp", "-1"], "--max-spp must be between 1 and"),
+                   "--time-budget", "5", "--max-spp", "-1"], "--max-spp: must be a whole number from 0 to"),
 ])
 def test_bad_guided_options_exit_2_before_any_work(cli, tmp_path, command, args, message):
     where = ["--bundle", tmp_path / "bundle"] if command == "farm" else ["--output", tmp_path / "bundle"]

@@ -219,11 +219,11 @@ def test_ctrl_c_twice_stops_the_render_and_writes_nothing(fog_blend, tmp_path):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (("--spp", "0"), "--spp must be at least 1"),
-    (("--spp", "-4"), "--spp must be at least 1"),
-    (("--spp", "many"), "invalid int value: 'many'"),
-    (("--seed", "-1"), "--seed must not be negative"),
-    (("--max-spp", "0"), "--max-spp must be at least 1"),
+    (("--spp", "0"), "--spp: must be a whole number from 1 to 16777216"),
+    (("--spp", "-4"), "--spp: must be a whole number from 1 to 16777216"),
+    (("--spp", "many"), "--spp: must be a whole number, not 'many'"),
+    (("--seed", "-1"), "--seed: must be a whole number from 0 to 2147483647"),
+    (("--max-spp", "0"), "--max-spp: must be a whole number from 1 to 1048576"),
     (("--out", "r.png"), "must be a .exr file"),
 ])
 @pytest.mark.blender          # the command line, as a user runs it

@@ -180,13 +180,13 @@ def test_demo_end_to_end(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (("experiment", "--scenes", "nowhere"), "unknown scene 'nowhere'"),
     (("experiment", "--scenes", "missing.blend"), "no such scene file"),
-    (("experiment", "--max-spp", "0"), "--max-spp must be at least 1"),
+    (("experiment", "--max-spp", "0"), "argument --max-spp: must be a whole number from 1 to"),
     (("experiment", "--variants", "gold,bogus"), "unknown variant 'bogus'"),
-    (("experiment", "--size", "2"), "--size must be between"),
-    (("experiment", "--resolution", "12by4"), "--resolution must look like"),
+    (("experiment", "--size", "2"), "argument --size: must be a whole number from 8 to 16384"),
+    (("experiment", "--resolution", "12by4"), "argument --resolution: must look like"),
     (("experiment", "--resolution", "64x36", "--size", "64"), "not both"),
     (("experiment", "--seed", "7"), "contestant seed 7 is the converged reference's seed"),
-    (("experiment", "--reference-spp", "0"), "--reference-spp must be at least 1"),
+    (("experiment", "--reference-spp", "0"), "--reference-spp: must be a whole number from 1 to 16777216"),
     (("demo", "--scene", "README.md"), "not a .blend file"),
 ])
 def test_bad_input_is_one_line(args, message):

@@ -126,7 +126,8 @@ def test_bad_input_exits_2_with_one_line(blender, cli, tmp_path, kind, message):
 
 
 def test_bad_resolution_is_refused(cli, tmp_path):
-    result = cli("xmap", tmp_path / "missing.blend", "--out", tmp_path, "--resolution", "wide")
+    (tmp_path / "unopened.blend").write_bytes(b"BLENDER-v500")    # refused before Blender opens it
+    result = cli("xmap", tmp_path / "unopened.blend", "--out", tmp_path, "--resolution", "wide")
     assert result.returncode == 2 and "--resolution" in result.stderr
 
 
@@ -149,6 +150,7 @@ def test_scene_is_unchanged_after_compute(blender):
     (("--samples", "16", "--tolerance", "0.01"), "exclude each other"),
 ])
 def test_bad_integration_options_are_refused(cli, tmp_path, options, message):
-    result = cli("xmap", tmp_path / "missing.blend", "--out", tmp_path, *options)
+    (tmp_path / "unopened.blend").write_bytes(b"BLENDER-v500")    # refused before Blender opens it
+    result = cli("xmap", tmp_path / "unopened.blend", "--out", tmp_path, *options)
     lines = result.stderr.strip().splitlines()
     assert result.returncode == 2 and len(lines) == 1 and message in lines[0]

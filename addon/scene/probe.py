@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from ...core.camera import CameraModel
+from ...core.checks import fits_in_memory
 from ...core.errors import InputError
 from ...core.media.scene_model import (VOLUME_NODE_TYPES, LightSource, Medium, VolumeClosure,
                                        closure_extinction)
@@ -19,10 +20,12 @@ from ...core.media.scene_model import (VOLUME_NODE_TYPES, LightSource, Medium, V
 
 
 def render_size(scene) -> tuple[int, int]:
-    """Output size in pixels: the resolution scaled by the percentage, as Blender renders."""
+    """Output size in pixels: the resolution scaled by the percentage, as Blender renders;
+    InputError for a size that cannot fit in memory (a scene set to 65536 x 65536, say)."""
     r = scene.render
-    return (max(1, int(r.resolution_x * r.resolution_percentage / 100)),
-            max(1, int(r.resolution_y * r.resolution_percentage / 100)))
+    return fits_in_memory(max(1, int(r.resolution_x * r.resolution_percentage / 100)),
+                          max(1, int(r.resolution_y * r.resolution_percentage / 100)),
+                          f"scene '{scene.name}' renders at")
 
 
 def camera_model(scene, size: tuple[int, int] | None = None, respect_border: bool = True) -> CameraModel:

@@ -21,11 +21,15 @@ _DATA_COLLECTIONS = ("materials", "worlds", "images", "node_groups", "objects", 
 
 
 def rna_values(struct, skip: tuple[str, ...] = ()) -> dict:
-    """The editable value properties (and ID pointers) of an RNA struct, as plain data."""
+    """The editable value properties (and ID pointers) of an RNA struct, as plain data.
+
+    A datablock's ``name`` is its identity, not a setting, and is left out; other structs'
+    ``name`` is a setting (a colour space's, say) and is kept."""
     values = {}
+    identity = ("name",) if _is_id(struct) else ()
     for prop in struct.bl_rna.properties:
         name = prop.identifier
-        if name in ("rna_type", "name") or name in skip or prop.is_readonly:
+        if name == "rna_type" or name in identity or name in skip or prop.is_readonly:
             continue
         if getattr(prop, "is_deprecated", False):   # kept only for old scripts; we never set them
             continue
@@ -69,14 +73,39 @@ def restore_values(struct, values: dict) -> None:
             except (AttributeError, TypeError, ValueError, RuntimeError):
                 # A property that is only settable in some states; the second pass retries.
                 continue
+    if values.get("name") == "" and struct.bl_rna.identifier in _COLORSPACE_STRUCTS \
+            and struct.name != "":
+        _clear_colorspace_name(struct)
+
+
+#: Structs that are Blender's ``ColorManagedColorspaceSettings``: one ``char name[64]``.
+_COLORSPACE_STRUCTS = ("ColorManagedInputColorspaceSettings",)
+
+
+def _clear_colorspace_name(struct) -> None:
+    """Give a colour space its empty name back. Files saved before Blender 5 (and new scenes)
+    hold "" in the image format's linear colour space, which the interface cannot set:
+    choosing a file format fills it in (with 'sRGB' for PNG) and every render to a file
+    chooses one. The struct is a single ``char name[64]``, so a zero first byte is exactly
+    the empty name; read back through RNA to make sure."""
+    import ctypes
+
+    ctypes.memset(struct.as_pointer(), 0, 1)
+    if struct.name != "":
+        raise RuntimeError(f"could not restore the empty colour space of {struct!r}")
 
 
 def _structs(scene) -> dict:
     """Name -> RNA struct for everything a render may touch."""
+    image = scene.render.image_settings
     structs = {
         "scene": scene,
         "render": scene.render,
-        "image_settings": scene.render.image_settings,
+        "image_settings": image,
+        # Setting the file format (every render to a file does) sets these too.
+        "image_linear_colorspace": image.linear_colorspace_settings,
+        "image_view_settings": image.view_settings,
+        "image_display_settings": image.display_settings,
         "view_settings": scene.view_settings,
         "display_settings": scene.display_settings,
     }

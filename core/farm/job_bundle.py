@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from ..files import write_json, write_text
+from ..files import output_set, write_json, write_text
 
 MARKER = "xsl_render_bundle.json"
 TEMPLATE = "template.yaml"
@@ -43,10 +43,11 @@ def _yaml(data: dict) -> str:
 
 
 def write_bundle(folder: str | Path, template: dict, values: dict, summary: dict) -> list[Path]:
-    """Write the bundle (marker first, so a half-written bundle is still recognised as ours)."""
+    """Write the bundle's files, all together or none (``core.files.output_set``)."""
     folder = check_bundle_folder(folder)
     marker = {"generator": "xsl-render farm", "format": 1,
               "written": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **summary}
-    return [write_json(folder / MARKER, marker),
-            write_text(folder / TEMPLATE, _yaml(template)),
-            write_text(folder / PARAMETER_VALUES, _yaml(values))]
+    with output_set():
+        return [write_json(folder / MARKER, marker),
+                write_text(folder / TEMPLATE, _yaml(template)),
+                write_text(folder / PARAMETER_VALUES, _yaml(values))]

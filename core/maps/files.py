@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..files import write_json
+from ..files import output_set, write_json
 from ..imageio import read_image, write_exr, write_png
 from .camera_rays import SKY_DEPTH, depth_from_exr, depth_to_exr
 
@@ -40,24 +40,32 @@ class MapSet:
 
 
 def write_map_set(folder: str | Path, maps: MapSet) -> list[Path]:
-    """Write every map, maps.json and the PNG previews; returns the paths written."""
+    """Write every map, maps.json and the PNG previews, all together or none
+    (``core.files.output_set``); returns the paths written. The names are the same every
+    time, so a new set replaces an earlier one in the folder whole."""
     folder = Path(folder)
-    written = [
-        write_exr(folder / "z.exr", depth_to_exr(maps.z), ["Z"],
-                  attributes={"xsl:z": "distance along the camera ray", "xsl:sky": SKY_DEPTH}),
-        write_exr(folder / "snapshot.exr", maps.snapshot),
-    ]
-    for name in MAP_NAMES:
-        written.append(write_exr(folder / f"{name}.exr", maps.director(name), ["Y"]))
-        written.append(write_png(folder / "preview" / f"{name}.png", maps.director(name)))
-    written.append(write_png(folder / "preview" / "snapshot.png", _display(maps.snapshot)))
-    finite = np.isfinite(maps.z)
-    if finite.any():
-        near, far = float(maps.z[finite].min()), float(maps.z[finite].max())
-        depth = np.where(finite, 1.0 - (maps.z - near) / max(far - near, 1e-9), 0.0)
-        written.append(write_png(folder / "preview" / "z.png", depth))
-    written.append(write_json(folder / "maps.json", maps.info))
+    with output_set():
+        written = [
+            write_exr(folder / "z.exr", depth_to_exr(maps.z), ["Z"],
+                      attributes={"xsl:z": "distance along the camera ray", "xsl:sky": SKY_DEPTH}),
+            write_exr(folder / "snapshot.exr", maps.snapshot),
+        ]
+        for name in MAP_NAMES:
+            written.append(write_exr(folder / f"{name}.exr", maps.director(name), ["Y"]))
+            written.append(write_png(folder / "preview" / f"{name}.png", maps.director(name)))
+        written.append(write_png(folder / "preview" / "snapshot.png", _display(maps.snapshot)))
+        written.append(write_png(folder / "preview" / "z.png", _depth_preview(maps.z)))
+        written.append(write_json(folder / "maps.json", maps.info))
     return written
+
+
+def _depth_preview(z: np.ndarray) -> np.ndarray:
+    """Near white, far black, sky (and a frame of only sky) black."""
+    finite = np.isfinite(z)
+    if not finite.any():
+        return np.zeros(z.shape, np.float32)
+    near, far = float(z[finite].min()), float(z[finite].max())
+    return np.where(finite, 1.0 - (z - near) / max(far - near, 1e-9), 0.0)
 
 
 def _display(snapshot: np.ndarray) -> np.ndarray:

@@ -26,6 +26,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
+from .options import MAX_N, MAX_SIGMA_BASE
 from .scale_space import gaussian_mixture_blur
 
 #: Sigmas are specified for this many pixels on the longer side (the paper's 512 px).
@@ -33,10 +34,10 @@ REFERENCE_SIZE = 512
 
 
 def check_parameters(n: int, sigma_base: float) -> None:
-    if not isinstance(n, (int, np.integer)) or n < 0:
-        raise InputError(f"--light-n must be a whole number >= 0, got {n}")
-    if not np.isfinite(sigma_base) or sigma_base <= 0:
-        raise InputError(f"--light-sigma-base must be > 0, got {sigma_base}")
+    if not isinstance(n, (int, np.integer)) or not 0 <= n <= MAX_N:
+        raise InputError(f"--light-n must be a whole number from 0 to {MAX_N}, got {n}")
+    if not np.isfinite(sigma_base) or not 0 < sigma_base <= MAX_SIGMA_BASE:
+        raise InputError(f"--light-sigma-base must be > 0 and at most {MAX_SIGMA_BASE:g}, got {sigma_base}")
 
 
 def resolution_scale(shape: tuple[int, int]) -> float:

@@ -8,6 +8,12 @@ import numpy as np
 from ..errors import InputError
 from .director import check_combination
 
+#: Bounds of the light map's n and sigma_base (``light_map``): the paper uses up to 20 and 10;
+#: eq. 6 with n iterations has about n^3 / 3 Gaussians, and a sigma_base of 100 already
+#: spreads a glow over many frames.
+MAX_N = 100
+MAX_SIGMA_BASE = 100.0
+
 
 @dataclass(frozen=True)
 class MapOptions:
@@ -31,11 +37,12 @@ class MapOptions:
     def validate(self) -> "MapOptions":
         check_combination(self.wx, self.ws, self.xs_op, ("wx", "ws", "xs-op"))
         check_combination(self.wxs, self.wl, self.xsl_op, ("wxs", "wl", "xsl-op"))
-        if self.light_n is not None and (int(self.light_n) != self.light_n or self.light_n < 0):
-            raise InputError(f"--light-n must be a whole number >= 0 or 'auto', got {self.light_n}")
-        if self.light_sigma_base is not None and not (np.isfinite(self.light_sigma_base)
-                                                      and self.light_sigma_base > 0):
-            raise InputError(f"--light-sigma-base must be > 0 or 'auto', got {self.light_sigma_base}")
+        n, sigma = self.light_n, self.light_sigma_base
+        if n is not None and (int(n) != n or not 0 <= n <= MAX_N):
+            raise InputError(f"--light-n must be a whole number from 0 to {MAX_N} or 'auto', got {n}")
+        if sigma is not None and not (np.isfinite(sigma) and 0 < sigma <= MAX_SIGMA_BASE):
+            raise InputError(f"--light-sigma-base must be > 0 and at most {MAX_SIGMA_BASE:g} or "
+                             f"'auto', got {sigma}")
         return self
 
     def to_dict(self) -> dict:

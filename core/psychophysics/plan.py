@@ -11,6 +11,7 @@ each completed block, and each participant sees the gold standard first in half 
 """
 from __future__ import annotations
 
+import math
 import random
 from dataclasses import dataclass
 
@@ -111,10 +112,14 @@ def durations_from_events(condition: str, events: dict[str, float]) -> dict[str,
     stamps = []
     for name in names:
         value = events.get(name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value \
-                or value in (float("inf"), float("-inf")):
+        try:
+            stamp = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+                else math.nan
+        except OverflowError:           # an int past float's range
+            stamp = math.nan
+        if not math.isfinite(stamp):
             raise ValueError(f"time stamp {name!r} missing or not a finite number")
-        stamps.append(float(value))
+        stamps.append(stamp)
     if any(later < earlier for earlier, later in zip(stamps, stamps[1:])):
         raise ValueError("time stamps out of order")
     if condition == NO_REFERENCE:

@@ -28,7 +28,7 @@ import OpenImageIO as oiio
 from ..errors import InputError
 
 ROLES = ("gold", "test")
-_NAME = re.compile(r"^(?P<scene>[A-Za-z0-9][A-Za-z0-9_-]*)\.(?P<role>gold|test)\.png$")
+_NAME = re.compile(r"^(?P<scene>[A-Za-z0-9][A-Za-z0-9_-]*)\.(?P<role>gold|test)\.png\Z")
 
 
 @dataclass(frozen=True)

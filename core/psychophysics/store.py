@@ -24,7 +24,7 @@ from .plan import (AGE_RANGES, NO_REFERENCE, POSITIONS, Trial, choose_condition,
 from .stimuli import StimulusPair
 
 SCHEMA_VERSION = "1"
-_PARTICIPANT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+_PARTICIPANT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -68,7 +68,12 @@ class ParticipantPlan:
 
 
 def _is_finite_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:               # an int past float's range
+        return False
 
 
 def _now() -> str:

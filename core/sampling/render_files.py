@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import write_json
+from ..files import output_set, write_json
 from ..imageio import write_exr, write_png
 
 
@@ -19,6 +19,13 @@ def spp_paths(out: Path) -> tuple[Path, Path]:
     """FILE.exr -> (FILE_spp.exr, FILE_spp.png)."""
     out = Path(out)
     return out.with_name(out.stem + "_spp.exr"), out.with_name(out.stem + "_spp.png")
+
+
+def render_output_paths(out: str | Path, stats_path: str | Path | None = None) -> dict[str, Path | None]:
+    """What :func:`write_render_outputs` writes, by the name a user knows it by."""
+    spp_exr, spp_png = spp_paths(Path(out))
+    return {"--out": Path(out), "its samples": spp_exr, "its samples preview": spp_png,
+            "--stats": Path(stats_path) if stats_path else None}
 
 
 def frame_attributes(mode: str, max_spp: int, seed: int, mean_spp: float) -> dict:
@@ -36,7 +43,8 @@ def preview_scale(ceiling: int | None, samples: np.ndarray) -> int:
 
 def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: dict,
                          max_spp: int, seed: int, stats_path: str | Path | None = None) -> list[Path]:
-    """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given).
+    """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given),
+    all together or none (``core.files.output_set``).
 
     The time the writes took is added to ``stats`` as the "write" phase.
     """
@@ -44,11 +52,12 @@ def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray
     started = time.perf_counter()
     attributes = frame_attributes(stats["mode"], max_spp, seed, stats["mean_spp"])
     spp_exr, spp_png = spp_paths(out)
-    written = [write_exr(out, image, ["R", "G", "B", "A"], attributes=attributes),
-               write_exr(spp_exr, samples, ["Y"], attributes=attributes),
-               write_png(spp_png, samples / float(max_spp))]
-    stats["phases_s"]["write"] = time.perf_counter() - started
-    stats["wall_s"] = sum(stats["phases_s"].values())
-    if stats_path:
-        written.append(write_json(stats_path, stats))
+    with output_set():
+        written = [write_exr(out, image, ["R", "G", "B", "A"], attributes=attributes),
+                   write_exr(spp_exr, samples, ["Y"], attributes=attributes),
+                   write_png(spp_png, samples / float(max_spp))]
+        stats["phases_s"]["write"] = time.perf_counter() - started
+        stats["wall_s"] = sum(stats["phases_s"].values())
+        if stats_path:
+            written.append(write_json(stats_path, stats))
     return written

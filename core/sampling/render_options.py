@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+from ..checks import MAX_SAMPLES, MAX_SEED, frame_size, parse_frame_size, whole_number
 from ..errors import InputError
 
 #: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
@@ -77,20 +78,17 @@ class RenderOptions:
 
     def check(self) -> "RenderOptions":
         """Raise InputError naming the first impossible option; return self."""
-        if self.max_spp < 1:
-            raise InputError(f"--max-spp must be at least 1 (got {self.max_spp})")
-        if self.min_spp < 1:
-            raise InputError(f"--min-spp must be at least 1 (got {self.min_spp})")
+        cycles = " (Cycles' limit)"
+        whole_number(self.max_spp, 1, MAX_SAMPLES, "--max-spp", cycles)
+        whole_number(self.min_spp, 1, MAX_SAMPLES, "--min-spp", cycles)
         if self.min_spp > self.max_spp:
             raise InputError(f"--min-spp {self.min_spp} is larger than --max-spp {self.max_spp}")
-        if self.tile_size < MIN_TILE_SIZE:
-            raise InputError(f"--tile-size must be at least {MIN_TILE_SIZE} pixels (got {self.tile_size})")
+        whole_number(self.tile_size, MIN_TILE_SIZE, 65_536, "--tile-size", " pixels")
         if not 0.0 < self.tile_quantile <= 1.0:
             raise InputError(f"--tile-quantile must be in (0, 1] (got {self.tile_quantile})")
         if self.spp_levels == 1 or self.spp_levels < 0:
             raise InputError(f"--spp-levels must be 0 (off) or at least 2 (got {self.spp_levels})")
-        if self.seed < 0:
-            raise InputError(f"--seed must not be negative (got {self.seed})")
+        whole_number(self.seed, 0, MAX_SEED, "--seed", " (Cycles' limit)")
         if not 0 <= self.margin <= 64:
             raise InputError(f"--margin must be between 0 and 64 pixels (got {self.margin})")
         if self.render_cost < 0:
@@ -98,9 +96,7 @@ class RenderOptions:
         if self.adaptive_threshold is not None and not self.adaptive_threshold > 0.0:
             raise InputError(f"--adaptive-threshold must be positive (got {self.adaptive_threshold})")
         if self.resolution is not None:
-            width, height = self.resolution
-            if width < 1 or height < 1:
-                raise InputError(f"--resolution must be positive (got {width}x{height})")
+            frame_size(*self.resolution)
         return self
 
     def noise_threshold(self, spp: int) -> float | None:
@@ -123,12 +119,6 @@ class RenderOptions:
 
 
 def parse_resolution(text: str) -> tuple[int, int]:
-    """'512x288' -> (512, 288); InputError for anything else."""
-    parts = text.strip().lower().split("x")
-    try:
-        width, height = (int(p) for p in parts)
-    except ValueError:
-        raise InputError(f"--resolution must look like 512x288 (got '{text}')") from None
-    if not (1 <= width <= 65536 and 1 <= height <= 65536):
-        raise InputError(f"--resolution {width}x{height} is out of range")
-    return width, height
+    """'512x288' -> (512, 288); InputError for anything else, and for sizes Blender cannot
+    render here (``core.checks.frame_size``)."""
+    return parse_frame_size(text)

@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
+from ..checks import name_list
 from ..errors import InputError
 
 #: Uniform budgets as fractions of the ceiling; the point at 1x is the gold standard.
@@ -167,11 +168,7 @@ def parse_curves(text: str | None) -> tuple[str, ...]:
     names = curve_names()
     if text is None:
         return tuple(names)
-    wanted = [item.strip() for item in text.split(",") if item.strip()]
-    unknown = [item for item in wanted if item not in names]
-    if unknown or not wanted:
-        raise InputError(f"--curves: unknown curve '{unknown[0] if unknown else text}' "
-                         f"(choose from {', '.join(names)})")
+    wanted = name_list(text, "--curves", names, "curve")
     return tuple(name for name in names if name in {"uniform", *wanted})
 
 

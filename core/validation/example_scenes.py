@@ -6,10 +6,11 @@ import os
 import re
 from pathlib import Path
 
+from ..checks import name_list
 from ..errors import InputError
 
 EXAMPLE_SCENES = ("balls_a", "balls_b", "statue", "road")
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*\Z")
 
 
 def example_folders() -> list[Path]:
@@ -36,9 +37,7 @@ def resolve_scenes(text: str | None) -> list[tuple[str, Path]]:
     A name is reported as is; a path under its file stem. Names must be unique, because each
     scene gets a folder of that name.
     """
-    items = list(EXAMPLE_SCENES) if text is None else [s.strip() for s in text.split(",") if s.strip()]
-    if not items:
-        raise InputError("--scenes is empty")
+    items = list(EXAMPLE_SCENES) if text is None else name_list(text, "--scenes")
     scenes: list[tuple[str, Path]] = []
     for item in items:
         if item.lower().endswith(".blend") or os.sep in item or "/" in item:

@@ -1,7 +1,9 @@
 """A reference and a test image, read and checked so that every metric can compare them.
 
-The metrics compare like with like: two scene-linear HDR renders (OpenEXR) or two
-display-referred LDR images (PNG, JPEG). Anything that would make a comparison meaningless
+The metrics compare like with like: two scene-linear HDR renders or two display-referred LDR
+images. Which is which is read from the file's pixels, not its name: floating-point pixels
+(OpenEXR, Radiance HDR, float TIFF) hold scene-linear radiance, integer pixels (PNG, JPEG,
+8- and 16-bit TIFF) display values. Anything that would make a comparison meaningless
 (different sizes or channel layouts, NaN or Inf pixels, a missing file, an HDR image against
 an LDR one) is bad input and raises :class:`~.errors.InputError` with one line.
 """
@@ -14,12 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..imageio import read_image
-
-# The file kinds we compare. HDR files hold scene-linear radiance (Cycles' EXR output);
-# LDR files hold display-encoded sRGB values in [0, 1] as a viewer saw them.
-HDR_SUFFIXES = (".exr",)
-LDR_SUFFIXES = (".png", ".jpg", ".jpeg")
+from ..imageio import image_is_float, read_image
 
 
 @dataclass(frozen=True)
@@ -44,14 +41,10 @@ class ImagePair:
 
 
 def dynamic_range_of(path: str | os.PathLike) -> bool:
-    """True for an HDR file (OpenEXR), False for an LDR one (PNG, JPEG); InputError otherwise."""
-    suffix = Path(path).suffix.lower()
-    if suffix in HDR_SUFFIXES:
-        return True
-    if suffix in LDR_SUFFIXES:
-        return False
-    known = ", ".join(HDR_SUFFIXES + LDR_SUFFIXES)
-    raise InputError(f"cannot compare {path}: unsupported image type '{suffix}' (use {known})")
+    """True for an HDR file (floating-point pixels: scene-linear), False for an LDR one
+    (integer pixels: display-encoded), whatever its name says; InputError for a file that is
+    not an image."""
+    return image_is_float(Path(path))
 
 
 def as_rgb(image: np.ndarray, name: str = "image") -> np.ndarray:
@@ -103,7 +96,7 @@ def read_pair(reference_path: str | os.PathLike, test_path: str | os.PathLike) -
     """Read and check a reference and a test image file (both HDR or both LDR)."""
     ref_hdr, test_hdr = dynamic_range_of(reference_path), dynamic_range_of(test_path)
     if ref_hdr != test_hdr:
-        kinds = {True: "HDR (OpenEXR)", False: "LDR (PNG/JPEG)"}
+        kinds = {True: "HDR (floating-point pixels)", False: "LDR (integer pixels)"}
         raise InputError(f"cannot compare {kinds[ref_hdr]} {reference_path} with "
                          f"{kinds[test_hdr]} {test_path}: use two images of the same kind")
     reference, test = read_image(reference_path), read_image(test_path)

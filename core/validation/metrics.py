@@ -96,6 +96,35 @@ def mse_metric(reference_display: np.ndarray, test_display: np.ndarray) -> Metri
                "seconds": time.perf_counter() - start})
 
 
+#: HDR-FLIP's exposure range (flip-evaluator 1.7, ``computeExposureParams``): from
+#: log2(x_max / max luminance) to log2(x_max / max(median luminance, float32 epsilon)) of the
+#: reference, where x_max is the radiance its ACES tone map brings to 0.85.
+_FLIP_ACES = (0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 2.43, 0.6 * 0.59, 0.14)
+_FLIP_A = _FLIP_ACES[0] - 0.85 * _FLIP_ACES[3]
+_FLIP_B = _FLIP_ACES[1] - 0.85 * _FLIP_ACES[4]
+_FLIP_C = _FLIP_ACES[2] - 0.85 * _FLIP_ACES[5]
+FLIP_X_MAX = (-_FLIP_B + math.sqrt(_FLIP_B ** 2 - 4 * _FLIP_A * _FLIP_C)) / (2 * _FLIP_A)
+_FLIP_EPSILON = float(np.finfo(np.float32).eps)
+
+
+def hdr_flip_exposures(reference: np.ndarray, test: np.ndarray) -> dict:
+    """Exposure parameters for HDR-FLIP where its own choice fails, else ``{}``.
+
+    FLIP takes its exposure range from the reference; a reference whose brightest pixel is
+    below float32's epsilon (black, or nearly) gives a start above the stop, and the library
+    then ends the whole process. Such a reference gets the range the test image would have
+    had (start from its brightest pixel), so that black against black is no error and
+    anything brighter than black is one.
+    """
+    from ..tonemap import luminance
+
+    if float(luminance(reference).max()) > 2.0 * _FLIP_EPSILON:
+        return {}
+    brightest = max(float(luminance(test).max()), _FLIP_EPSILON)
+    return {"startExposure": math.log2(FLIP_X_MAX / brightest),
+            "stopExposure": math.log2(FLIP_X_MAX / _FLIP_EPSILON)}
+
+
 def flip_metric(reference: np.ndarray, test: np.ndarray, hdr: bool,
                 pixels_per_degree: float = PIXELS_PER_DEGREE) -> MetricResult:
     """FLIP (flip-evaluator): LDR-FLIP on display-encoded images, HDR-FLIP on linear ones.
@@ -111,9 +140,9 @@ def flip_metric(reference: np.ndarray, test: np.ndarray, hdr: bool,
     mode = "HDR" if hdr else "LDR"
     ref = np.ascontiguousarray(np.maximum(reference, 0.0) if hdr else reference, dtype=np.float32)
     tst = np.ascontiguousarray(np.maximum(test, 0.0) if hdr else test, dtype=np.float32)
+    parameters = {"ppd": float(pixels_per_degree), **(hdr_flip_exposures(ref, tst) if hdr else {})}
     flip_map, mean_flip, used = flip_evaluator.evaluate(
-        ref, tst, mode, applyMagma=False, computeMeanError=True,
-        parameters={"ppd": float(pixels_per_degree)})
+        ref, tst, mode, applyMagma=False, computeMeanError=True, parameters=parameters)
     extra = {"mode": f"{mode}-FLIP", "mean_flip": float(mean_flip), "ppd": float(used["ppd"])}
     if hdr:
         extra.update(start_exposure=float(used["startExposure"]),

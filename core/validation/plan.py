@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..checks import name_list
 from ..errors import InputError
 from ..maps.options import MapOptions
 
@@ -91,11 +92,7 @@ def parse_variants(text: str | None) -> tuple[str, ...]:
     metric compares with it), and equal-time runs bring the XSL run they take their time from."""
     if text is None:
         return DEFAULT_VARIANTS
-    names = [name.strip() for name in text.split(",") if name.strip()]
-    unknown = [name for name in names if name not in VARIANTS]
-    if unknown or not names:
-        raise InputError(f"--variants: unknown variant '{unknown[0] if unknown else text}' "
-                         f"(choose from {', '.join(VARIANTS)})")
+    names = name_list(text, "--variants", VARIANTS, "variant")
     wanted = {GOLD, *names}
     if any(VARIANTS[name].equal_time for name in names):
         wanted.add(EQUAL_TIME_SOURCE)

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..files import atomic_path
+from ..files import atomic_path, output_set
 from ..imageio import image_attributes, read_image, write_exr
 from .example_scenes import example_folders
 from .store import inputs_hash, read_record, write_record
@@ -155,10 +155,13 @@ def write_reference(folder: str | os.PathLike, inputs: ReferenceInputs, image: n
     """Write the entry for ``inputs`` into ``folder``: the EXR first, the record last.
     ``file_name`` (the .blend's name) is kept in the record for people, not in the key."""
     exr, record_path = entry_paths(folder, inputs.key)
-    write_exr(exr, image, attributes={SEED_ATTRIBUTE: inputs.seed, SPP_ATTRIBUTE: inputs.spp,
-                                      KEY_ATTRIBUTE: inputs.key})
     record = {"input_hash": inputs.key, "file": file_name, "inputs": inputs.to_dict(), "stats": stats}
-    write_record(record_path, record)
+    # A set of its own, even inside a command's: the entry is read back at once (the
+    # reference command copies it) and outlives the command as a cache entry.
+    with output_set(own=True):
+        write_exr(exr, image, attributes={SEED_ATTRIBUTE: inputs.seed, SPP_ATTRIBUTE: inputs.spp,
+                                          KEY_ATTRIBUTE: inputs.key})
+        write_record(record_path, record)
     return CachedReference(exr, record, "cache")
 
 

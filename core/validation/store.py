@@ -22,7 +22,7 @@ import json
 import os
 from pathlib import Path
 
-from ..errors import InputError
+from ..checks import writable_folder
 from ..files import file_sha256, json_digest, write_json
 
 #: Bumped when a change to the pipeline makes old renders or metrics incomparable.
@@ -56,12 +56,4 @@ def write_record(path: str | os.PathLike, record: dict) -> Path:
 def check_output_folder(folder: str | os.PathLike, label: str = "--out") -> Path:
     """InputError (one line) unless ``folder`` is, or can become, a writable folder
     (``label`` names it in the message)."""
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"{label} {folder} is a file, not a folder")
-    existing = folder.absolute()
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
-        raise InputError(f"cannot write into {folder}: {existing} is not a writable folder")
-    return folder
+    return writable_folder(folder, name=label)

@@ -7,8 +7,11 @@ import sys
 import warnings
 from contextlib import contextmanager
 
+from ...core.checks import MAX_SIDE
 from ...core.errors import InputError
-from ...core.maps.options import MapOptions
+from ...core.maps.options import MAX_N, MAX_SIGMA_BASE, MapOptions
+from ...core.sampling.render_options import MIN_TILE_SIZE
+from . import argtypes
 
 
 def add_scene_positional(parser, help_text: str = "the .blend file (never written)") -> None:
@@ -18,7 +21,7 @@ def add_scene_positional(parser, help_text: str = "the .blend file (never writte
         parser.add_argument("scene", metavar="SCENE.blend", nargs="?", default=None, type=_no_scene,
                             help="leave out: inside Blender the open file is used")
     else:
-        parser.add_argument("scene", metavar="SCENE.blend", help=help_text)
+        parser.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help=help_text)
 
 
 def _no_scene(text: str):
@@ -29,8 +32,9 @@ def _no_scene(text: str):
 def add_scene_arguments(parser) -> None:
     add_scene_positional(parser)
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
-    parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
-    parser.add_argument("--frame", type=int, help="frame to evaluate (default: the current one)")
+    parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render resolution (default: the scene's)")
+    parser.add_argument("--frame", type=argtypes.FRAME, help="frame to evaluate (default: the current one)")
 
 
 def parse_resolution(text: str | None) -> tuple[int, int] | None:
@@ -38,20 +42,6 @@ def parse_resolution(text: str | None) -> tuple[int, int] | None:
     from ...core.sampling.render_options import parse_resolution as parse
 
     return None if text is None else parse(text)
-
-
-def _auto_or(kind):
-    def convert(text: str):
-        return None if text == "auto" else kind(text)
-    convert.__name__ = f"{kind.__name__} or auto"
-    return convert
-
-
-def _off_or(kind):
-    def convert(text: str):
-        return None if text == "off" else kind(text)
-    convert.__name__ = f"{kind.__name__} or off"
-    return convert
 
 
 def add_map_arguments(parser) -> None:
@@ -65,9 +55,10 @@ def add_map_arguments(parser) -> None:
     group.add_argument("--wxs", type=float, default=defaults.wxs, help="weight of XS in XSL (0.5)")
     group.add_argument("--wl", type=float, default=defaults.wl, help="weight of L in XSL (0.5)")
     group.add_argument("--xsl-op", default=defaults.xsl_op, help="XSL operator: add or multiply (add)")
-    group.add_argument("--light-n", type=_auto_or(int), default=None,
+    group.add_argument("--light-n", type=argtypes.auto_or(argtypes.integer(0, MAX_N)), default=None,
                        help="eq. 6 iterations n, or auto from the fog's optical depth (auto)")
-    group.add_argument("--light-sigma-base", type=_auto_or(float), default=None,
+    group.add_argument("--light-sigma-base", default=None,
+                       type=argtypes.auto_or(argtypes.number(above=0.0, hi=MAX_SIGMA_BASE)),
                        help="eq. 6 sigma_base in px at 512 px, or auto (auto)")
     group.add_argument("--minbound", action=argparse.BooleanOptionalAction, default=defaults.minbound,
                        help="fill sky pixels with the smallest X (MinBound; on)")
@@ -77,22 +68,25 @@ def add_tile_arguments(parser) -> None:
     """How a selective render cuts the frame into rectangles
     (``core.sampling.render_options.RenderOptions``)."""
     tiles = parser.add_argument_group("tiles (xs, xsl)")
-    tiles.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
-    tiles.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
-    tiles.add_argument("--tile-quantile", type=float, default=1.0,
+    tiles.add_argument("--min-spp", type=argtypes.SAMPLES, default=1,
+                       help="samples floor per pixel (default 1)")
+    tiles.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, MAX_SIDE), default=32,
+                       help="tile edge in pixels (default 32)")
+    tiles.add_argument("--tile-quantile", type=argtypes.number(above=0.0, hi=1.0), default=1.0,
                        help="quantile of a tile's per-pixel targets it renders with (default 1 = max)")
-    tiles.add_argument("--spp-levels", type=int, default=0,
+    tiles.add_argument("--spp-levels", type=argtypes.integer(0, 1024), default=0,
                        help="round tile samples up to N geometric levels (default 0 = off)")
-    tiles.add_argument("--margin", type=int, default=0,
+    tiles.add_argument("--margin", type=argtypes.integer(0, 64), default=0,
                        help="pixels rendered around each rectangle and cropped (default 0; "
                             "10 = bit-identical to a full-frame render)")
-    tiles.add_argument("--render-cost", type=int, default=1024,
+    tiles.add_argument("--render-cost", type=argtypes.integer(0, 10**15), default=1024,
                        help="fixed cost of one render in pixel-samples; tiles split down to 8 px "
                             "where that saves more (default 1024)")
-    tiles.add_argument("--adaptive-threshold", type=_off_or(float), default=None,
+    tiles.add_argument("--adaptive-threshold", default=None,
+                       type=argtypes.auto_or(argtypes.number(above=0.0, hi=1.0), "off"),
                        help="Cycles adaptive sampling inside each rectangle, noise threshold "
                             "T / sqrt(spp / max-spp) (default: off)")
-    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    parser.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
     parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="denoise the finished frame with Open Image Denoise, guided by albedo "
                              "and normal, the same in every mode (default on)")
@@ -101,20 +95,24 @@ def add_tile_arguments(parser) -> None:
 def add_guided_arguments(parser, budget_required: bool = False) -> None:
     """The options of ``--mode guided`` (``core.sampling.guided_plan.GuidedOptions``);
     ``budget_required`` where there is no other mode."""
-    from ...core.sampling.guided_plan import IMPORTANCE_MAPS, GuidedOptions
+    from ...core.sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET, GuidedOptions
 
+    # The ranges of GuidedOptions.check, here so that a bad value ends the command while it is
+    # parsed (one line, before Blender loads) whatever the mode.
     defaults = GuidedOptions(time_budget=1.0)
     guided = parser.add_argument_group("guided")
-    guided.add_argument("--time-budget", type=float, metavar="SECONDS", required=budget_required,
+    guided.add_argument("--time-budget", type=argtypes.number(above=0.0, hi=MAX_TIME_BUDGET), metavar="SECONDS",
+                        required=budget_required,
                         help="guided: seconds for the whole render (maps, passes, denoising)")
     guided.add_argument("--importance", choices=IMPORTANCE_MAPS, default=defaults.importance,
                         help="guided: director map that weighs the estimated error (default none)")
-    guided.add_argument("--pilot-fraction", type=float, default=defaults.pilot_fraction,
+    guided.add_argument("--pilot-fraction", type=argtypes.number(above=0.0, hi=1.0),
+                        default=defaults.pilot_fraction,
                         help=f"guided: share of the budget for the pilot pass (default {defaults.pilot_fraction})")
-    guided.add_argument("--guided-exponent", type=float, default=defaults.exponent,
+    guided.add_argument("--guided-exponent", type=argtypes.number(0.0, 2.0), default=defaults.exponent,
                         help="guided: samples go as (score x importance) to this power; 0 is "
                              f"uniform (default {defaults.exponent})")
-    guided.add_argument("--level-ratio", type=float, default=defaults.level_ratio,
+    guided.add_argument("--level-ratio", type=argtypes.number(above=1.0, hi=4.0), default=defaults.level_ratio,
                         help="guided: sample counts are rounded to powers of this ratio "
                              f"(default {defaults.level_ratio})")
 

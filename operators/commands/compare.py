@@ -7,7 +7,6 @@ magma PNG, ``--heatmap-dir`` the maps of all metrics (mse.png, flip.png, vdp.png
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 NAME = "compare"
@@ -15,31 +14,47 @@ HELP = ("difference metrics (MSE, FLIP, VDP) between a reference and a test imag
         "average pixel error, error pixels, heatmaps")
 
 
+#: Bounds of --exposure in stops: 2^64 times any render's radiance still fits a float32.
+MAX_EXPOSURE_EV = 64.0
+#: The maps --heatmap-dir writes.
+HEATMAP_NAMES = ("mse", "flip", "vdp")
+
+
 def add_arguments(parser) -> None:
-    parser.add_argument("reference", metavar="REF", help="reference image (gold standard): .exr, .png or .jpg")
-    parser.add_argument("test", metavar="TEST", help="test image of the same size and kind as REF")
-    parser.add_argument("--json", metavar="FILE", help="write all numbers to this JSON file")
-    parser.add_argument("--heatmap", metavar="FILE.png", help="write the FLIP difference map as a magma PNG")
-    parser.add_argument("--heatmap-dir", metavar="DIR",
+    from . import argtypes
+
+    image = argtypes.input_file(what="image file")
+    parser.add_argument("reference", metavar="REF", type=image,
+                        help="reference image (gold standard): .exr, .png or .jpg")
+    parser.add_argument("test", metavar="TEST", type=image, help="test image of the same size and kind as REF")
+    parser.add_argument("--json", metavar="FILE", type=argtypes.output_file(),
+                        help="write all numbers to this JSON file")
+    parser.add_argument("--heatmap", metavar="FILE.png", type=argtypes.output_file(".png"),
+                        help="write the FLIP difference map as a magma PNG")
+    parser.add_argument("--heatmap-dir", metavar="DIR", type=argtypes.output_folder(),
                         help="write every metric's map as DIR/mse.png, flip.png, vdp.png (magma)")
-    parser.add_argument("--exposure", type=float, default=0.0, metavar="EV",
+    parser.add_argument("--exposure", type=argtypes.number(-MAX_EXPOSURE_EV, MAX_EXPOSURE_EV),
+                        default=0.0, metavar="EV",
                         help="exposure in stops of the display transform for EXR inputs (default 0: "
                              "Blender's Standard view)")
     parser.add_argument("--no-vdp", action="store_true",
                         help="skip ColorVideoVDP (the slow metric; it is optional anyway)")
 
 
+def check(args) -> None:
+    from ...core.checks import distinct_outputs
+
+    folder = {f"--heatmap-dir's {name}.png": Path(args.heatmap_dir) / f"{name}.png"
+              for name in HEATMAP_NAMES} if args.heatmap_dir else {}
+    distinct_outputs({"--json": args.json, "--heatmap": args.heatmap, **folder})
+
+
 def run(args) -> int:
-    from ...core.errors import InputError
     from ...core.files import write_json
     from ...core.validation.heatmap import write_heatmap
     from ...core.validation.image_pair import read_pair
     from ...core.validation.metrics import compare_images, display_transform_description
 
-    if not math.isfinite(args.exposure):
-        raise InputError(f"--exposure must be a finite number of stops, got {args.exposure}")
-    if args.heatmap and Path(args.heatmap).suffix.lower() != ".png":
-        raise InputError(f"--heatmap must name a .png file, got {args.heatmap}")
     pair = read_pair(args.reference, args.test)
     results = compare_images(pair, exposure_ev=args.exposure, vdp=not args.no_vdp)
 

@@ -14,33 +14,38 @@ import sys
 from pathlib import Path
 
 NAME = "curves"
+#: Finished runs are kept as they come (the curves resume), not held back for the end.
+OUTPUTS_AS_A_SET = False
 HELP = ("time-quality curves (uniform, Cycles adaptive, path guiding, XS, XSL) against the "
         "converged reference, with each run's equal-quality speedup; DIR/curves.json, "
         "curves.png, report.html (resumable)")
 
 
 def add_arguments(parser) -> None:
+    from ...addon.validation.curves_runner import MAX_REPEATS
     from ...core.validation.contestants import curve_names
+    from . import argtypes
     from .common import add_scene_arguments
+    from .reference import ceiling
 
     add_scene_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="DIR",
+    parser.add_argument("--out", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished runs in it are reused")
-    parser.add_argument("--max-spp", type=int, metavar="CEILING",
+    parser.add_argument("--max-spp", type=ceiling, metavar="CEILING",
                         help="the ceiling: gold's samples per pixel, the budgets follow it "
                              "(default: the scene's own Cycles samples)")
-    parser.add_argument("--repeats", type=int, default=1, metavar="N",
+    parser.add_argument("--repeats", type=argtypes.integer(1, MAX_REPEATS), default=1, metavar="N",
                         help="render every run N times with seeds 0..N-1 and report the median "
                              "time and error (default 1)")
-    parser.add_argument("--reference", metavar="REF.exr",
+    parser.add_argument("--reference", metavar="REF.exr", type=argtypes.input_file(what="reference file"),
                         help="the converged reference to compare with (default: `xsl-render "
                              "reference` at the same size, from the cache or rendered now)")
-    parser.add_argument("--reference-spp", type=int, metavar="N",
+    parser.add_argument("--reference-spp", type=argtypes.SAMPLES, metavar="N",
                         help="samples of the reference made here (default max(1024, 16 x ceiling))")
     parser.add_argument("--curves", metavar="LIST",
                         help=f"curves to render (default all: {', '.join(curve_names())}); "
                              "uniform is always in")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=argtypes.SEED, default=0,
                         help="first contestant seed (default 0; never the reference's)")
     parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
                         help="ColorVideoVDP's JOD where it is installed (default on)")

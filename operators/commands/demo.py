@@ -32,10 +32,14 @@ QUICK_VARIANTS = ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uni
 #: The example scenes' own ceiling (the default), and the ceilings of --full: the paper's 16 too.
 DEFAULT_CEILING = 64
 FULL_CEILINGS = (16, 64)
+#: Finished steps are kept as they come (a rerun reuses them), not held back for the end.
+OUTPUTS_AS_A_SET = False
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", default="xsl-demo", metavar="DIR",
+    from . import argtypes
+
+    parser.add_argument("--out", default="xsl-demo", metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished work in it is reused (default xsl-demo)")
     parser.add_argument("--full", action="store_true",
                         help="every version of the paper (X only, S only, XS, XSL with and without "
@@ -43,9 +47,9 @@ def add_arguments(parser) -> None:
     add_quality_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     # For tests and quick looks: a smaller frame, another ceiling, another scene.
-    parser.add_argument("--resolution", help=argparse.SUPPRESS)
-    parser.add_argument("--max-spp", type=int, default=None, help=argparse.SUPPRESS)
-    parser.add_argument("--scene", help=argparse.SUPPRESS)
+    parser.add_argument("--resolution", type=argtypes.RESOLUTION, help=argparse.SUPPRESS)
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--scene", type=argtypes.SCENE, help=argparse.SUPPRESS)
 
 
 def run(args) -> int:

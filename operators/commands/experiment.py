@@ -12,6 +12,8 @@ import argparse
 from pathlib import Path
 
 NAME = "experiment"
+#: Finished steps are kept as they come (the run resumes), not held back for the end.
+OUTPUTS_AS_A_SET = False
 HELP = ("render gold, X-only, S-only, XS, XSL, uniform and equal-time baselines of the example "
         "scenes, measure time, MSE, VDP and FLIP against the converged reference (and the paper's "
         "gold standard), and write results.json and an HTML report (resumable)")
@@ -19,11 +21,12 @@ HELP = ("render gold, X-only, S-only, XS, XSL, uniform and equal-time baselines 
 
 def add_arguments(parser) -> None:
     from ...core.validation.plan import DEFAULT_MINBOUND_SCENES, VARIANTS
+    from . import argtypes
 
     parser.add_argument("--scenes", metavar="LIST",
                         help="comma-separated example names (balls_a, balls_b, statue, road) or "
                              ".blend paths (default: the four examples)")
-    parser.add_argument("--out", default="xsl-experiment", metavar="DIR",
+    parser.add_argument("--out", default="xsl-experiment", metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished work in it is reused (default xsl-experiment)")
     add_run_arguments(parser)
     parser.add_argument("--variants", metavar="LIST",
@@ -36,23 +39,31 @@ def add_arguments(parser) -> None:
 
 def add_run_arguments(parser) -> None:
     """Ceiling, size, tiles, seed, denoising, VDP."""
-    parser.add_argument("--max-spp", type=int, default=16,
+    from ...core.checks import MAX_SIDE
+    from ...core.sampling.render_options import MIN_TILE_SIZE
+    from . import argtypes
+
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=16,
                         help="samples per pixel of the gold standard and ceiling of the maps "
                              "(default 16, the paper's)")
-    parser.add_argument("--resolution", metavar="WxH", help="render every scene at this size")
-    parser.add_argument("--size", type=int, metavar="N",
+    parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render every scene at this size")
+    parser.add_argument("--size", type=argtypes.integer(8, 16384), metavar="N",
                         help="scale each scene to N pixels on its longer side (the paper: 512; "
                              "default: each scene's own resolution)")
-    parser.add_argument("--min-spp", type=int, default=1, help="samples floor per pixel (default 1)")
-    parser.add_argument("--tile-size", type=int, default=32, help="tile edge in pixels (default 32)")
-    parser.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    parser.add_argument("--min-spp", type=argtypes.SAMPLES, default=1, help="samples floor per pixel (default 1)")
+    parser.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, MAX_SIDE), default=32,
+                        help="tile edge in pixels (default 32)")
+    parser.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
     add_quality_arguments(parser, "samples of the converged reference each run is measured "
                                   "against (default max(1024, 16 x the ceiling); cached)")
 
 
 def add_quality_arguments(parser, reference_help: str | None = None) -> None:
     """--denoise, --vdp and --reference-spp, shared with ``demo`` (which hides the last)."""
-    parser.add_argument("--reference-spp", type=int, metavar="N",
+    from . import argtypes
+
+    parser.add_argument("--reference-spp", type=argtypes.SAMPLES, metavar="N",
                         help=reference_help or argparse.SUPPRESS)
     parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="denoise every finished frame with Open Image Denoise, gold and "

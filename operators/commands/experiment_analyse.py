@@ -9,11 +9,14 @@ HELP = ("per scene and condition: correct/incorrect counts, chi-square against 5
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("db", metavar="DB", help="the answers database of experiment-serve")
+    from . import argtypes
+
+    parser.add_argument("db", metavar="DB", type=argtypes.input_file(what="answers database"),
+                        help="the answers database of experiment-serve")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--chart", metavar="FILE.png",
+    parser.add_argument("--chart", metavar="FILE.png", type=argtypes.output_file(".png"),
                         help="write a bar chart of percent correct with sd error bars")
-    parser.add_argument("--timing-tolerance-ms", type=float, default=50.0,
+    parser.add_argument("--timing-tolerance-ms", type=argtypes.number(lo=0.0), default=50.0,
                         help="count trials whose measured display durations missed the nominal "
                              "4 s / 2 s / 8 s by more than this (default 50 ms)")
     parser.add_argument("--exclude-off-timing", action="store_true",
@@ -25,10 +28,6 @@ def run(args) -> int:
     from ...core.errors import InputError
     from ...core.psychophysics.store import read_answers
 
-    if args.chart and not args.chart.lower().endswith(".png"):
-        raise InputError(f"--chart must be a .png file, not {args.chart}")
-    if args.timing_tolerance_ms < 0:
-        raise InputError("--timing-tolerance-ms cannot be negative")
     answers = read_answers(args.db)
     if not answers:
         raise InputError(f"{args.db} holds no answers yet")

@@ -14,12 +14,16 @@ analyses it.
 """
 from __future__ import annotations
 
-import signal
 from pathlib import Path
 
 NAME = "experiment-serve"
 HELP = ("serve the 2AFC experiment of section 6.2 (no reference / reference) on the "
         "<scene>.gold.png + <scene>.test.png pairs of a folder; answers go to SQLite")
+
+#: Ctrl-C and SIGTERM stop the server cleanly (KeyboardInterrupt in its main thread).
+INTERRUPTIBLE = True
+#: The answers go to SQLite one by one as they come.
+OUTPUTS_AS_A_SET = False
 
 CONDITION_CHOICES = {
     "alternate": ("no-reference", "reference"),
@@ -29,13 +33,15 @@ CONDITION_CHOICES = {
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("stimuli", metavar="STIMULI_DIR",
+    from . import argtypes
+
+    parser.add_argument("stimuli", metavar="STIMULI_DIR", type=argtypes.input_folder("stimuli folder"),
                         help="folder of <scene>.gold.png and <scene>.test.png pairs (same size per pair)")
-    parser.add_argument("--port", type=int, default=8000,
+    parser.add_argument("--port", type=argtypes.integer(0, 65535), default=8000,
                         help="TCP port (default 8000; 0 picks a free one)")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1, this machine only)")
-    parser.add_argument("--db", metavar="FILE.sqlite",
+    parser.add_argument("--db", metavar="FILE.sqlite", type=argtypes.output_file(),
                         help="answers database (default STIMULI_DIR/experiment.sqlite); "
                              "reuse it to continue an experiment")
     parser.add_argument("--condition", choices=sorted(CONDITION_CHOICES), default="alternate",
@@ -43,30 +49,29 @@ def add_arguments(parser) -> None:
                              "(the paper's first experiment); or one condition for everybody")
 
 
+def check(args) -> None:
+    from ...core.checks import writable_file
+
+    if args.db is None:                     # the default: next to the stimuli
+        writable_file(Path(args.stimuli) / "experiment.sqlite", name="the answers database")
+
+
 def run(args) -> int:
-    from ...core.errors import InputError
     from ...core.psychophysics.stimuli import scan_stimuli
     from ..experiment_server import start_server
 
-    if not 0 <= args.port <= 65535:
-        raise InputError(f"--port must be 0..65535, not {args.port}")
     pairs = scan_stimuli(args.stimuli)
     db_path = Path(args.db) if args.db else Path(args.stimuli) / "experiment.sqlite"
     server = start_server(pairs, db_path, args.host, args.port, CONDITION_CHOICES[args.condition])
     server.say(f"{len(pairs)} scenes, condition {args.condition}; answers go to {db_path}")
     server.say(f"open {server.url} in the participant's browser (Ctrl-C stops)")
-    # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly.
-    previous = signal.signal(signal.SIGTERM, _stop)
+    # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly: the
+    # command line's signal watcher raises KeyboardInterrupt here (INTERRUPTIBLE).
     try:
         server.serve_forever()
     except KeyboardInterrupt:
         server.say("stopped; every answer given is in the database")
     finally:
-        signal.signal(signal.SIGTERM, previous)
         server.server_close()
         server.store.close()
     return 0
-
-
-def _stop(signum, frame):
-    raise KeyboardInterrupt

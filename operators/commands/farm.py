@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from ...core.errors import InputError
+from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
                      guided_options_from_args, guided_render_options, map_options_from_args,
                      parse_resolution)
@@ -25,13 +26,15 @@ DEFAULT_TASKS_PER_FRAME = 4
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
-    parser.add_argument("--bundle", required=True, metavar="DIR", help="folder for the job bundle")
+    parser.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE, help="the .blend file (never written)")
+    parser.add_argument("--bundle", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="folder for the job bundle")
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
     parser.add_argument("--frames", metavar="START-END",
                         help="frames to render: 12, 1-250 or 1-250:2 (default: the scene's range)")
-    parser.add_argument("--resolution", metavar="WxH", help="render resolution (default: the scene's)")
-    parser.add_argument("--max-spp", type=int,
+    parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render resolution (default: the scene's)")
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES,
                         help="samples per pixel where the map is 1 (default: the scene's Cycles "
                              "samples); guided: an optional per-pixel ceiling (default none)")
     parser.add_argument("--mode", choices=("xs", "xsl", "guided"), default="xsl",
@@ -91,8 +94,6 @@ def run(args) -> int:
     if guided is not None:
         guided_render_options(guided, args.seed, resolution)                # checked now, set later
     else:
-        if args.max_spp is not None and args.max_spp < 1:
-            raise InputError(f"--max-spp must be at least 1 (got {args.max_spp})")
         tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
 

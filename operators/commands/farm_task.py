@@ -21,6 +21,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
                      guided_options_from_args, guided_render_options, map_options_from_args,
                      parse_resolution, render_options_from_args, warnings_as_lines)
@@ -29,29 +30,39 @@ NAME = "farm-task"
 HELP = ("run one task of a farm job (maps, tiles or composite of a frame, or a guided frame); "
         "used by job templates")
 MODES = ("xs", "xsl")
+#: Each task keeps what it finished, with what it was made from, so a rerun resumes.
+OUTPUTS_AS_A_SET = False
 
 
 def _frame_arguments(parser) -> None:
-    parser.add_argument("--frame", type=int, required=True, help="the frame")
-    parser.add_argument("--output", required=True, metavar="DIR", help="the job's output folder")
+    parser.add_argument("--frame", type=argtypes.FRAME, required=True, help="the frame")
+    parser.add_argument("--output", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="the job's output folder")
 
 
 def add_arguments(parser) -> None:
+    from ...core import checks
+    from ...core.sampling.render_options import MIN_TILE_SIZE
+
     steps = parser.add_subparsers(dest="step", metavar="STEP")
     steps.required = True
 
     maps = steps.add_parser("maps", help="director maps and tile plan of a frame")
-    maps.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    maps.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
     maps.add_argument("--scene-name", required=True, help="which scene of the file")
     _frame_arguments(maps)
     maps.add_argument("--mode", required=True, choices=MODES, help="which director map plans the tiles")
-    maps.add_argument("--max-spp", type=int, required=True, help="samples per pixel where the map is 1")
-    maps.add_argument("--resolution", required=True, metavar="WxH", help="render resolution")
+    maps.add_argument("--max-spp", type=argtypes.SAMPLES, required=True,
+                      help="samples per pixel where the map is 1")
+    maps.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
+                      help="render resolution")
     _map_arguments(maps)
     add_tile_arguments(maps)
 
     tiles = steps.add_parser("tiles", help="render one task's share of a frame's rectangles")
-    tiles.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    tiles.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
     _frame_arguments(tiles)
     tiles.add_argument("--group", type=int, required=True, help="this task's number, 1..--groups")
     tiles.add_argument("--groups", type=int, required=True, help="tile tasks per frame")
@@ -61,17 +72,28 @@ def add_arguments(parser) -> None:
     composite.add_argument("--groups", type=int, help="tile tasks per frame (for the statistics)")
 
     guided = steps.add_parser("guided", help="render a frame with the guided sampler within its time budget")
-    guided.add_argument("scene", metavar="SCENE.blend", help="the .blend file (never written)")
+    guided.add_argument("scene", metavar="SCENE.blend", type=argtypes.SCENE,
+                      help="the .blend file (never written)")
     guided.add_argument("--scene-name", required=True, help="which scene of the file")
     _frame_arguments(guided)
-    guided.add_argument("--resolution", required=True, metavar="WxH", help="render resolution")
-    guided.add_argument("--max-spp", type=int, default=0,
+    guided.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
+                        help="render resolution")
+    guided.add_argument("--max-spp", type=argtypes.integer(0, checks.MAX_SAMPLES), default=0,
                         help="the most samples any pixel may get; 0: no ceiling (default)")
     add_guided_arguments(guided, budget_required=True)
-    guided.add_argument("--tile-size", type=int, default=32,
+    guided.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, checks.MAX_SIDE), default=32,
                         help="edge of the tiles the samples are allocated on (default 32)")
-    guided.add_argument("--seed", type=int, default=0, help="Cycles seed for every render (default 0)")
+    guided.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
     _map_arguments(guided)
+
+
+def check(args) -> None:
+    """A guided task's options taken together (``GuidedOptions.check``), before anything loads;
+    --max-spp 0 is the job template's "no ceiling"."""
+    if args.step == "guided":
+        if args.max_spp == 0:
+            args.max_spp = None
+        guided_options_from_args(args)
 
 
 def _map_arguments(parser) -> None:
@@ -153,9 +175,7 @@ def _guided(args) -> int:
     from ...core.farm.files import FrameFiles
     from ...core.maps.xmap import XMapWarning
 
-    if args.max_spp == 0:
-        args.max_spp = None                     # the job template's "no ceiling"
-    guided = guided_options_from_args(args)
+    guided = guided_options_from_args(args)           # --max-spp 0 became None in check()
     options = guided_render_options(guided, args.seed, parse_resolution(args.resolution))
     map_options = _map_options(args)
     with warnings_as_lines(MapWarning, XMapWarning):

@@ -10,41 +10,38 @@ def add_arguments(parser) -> None:
     from ...core.psychophysics.hotspots import (PAPER_DISTANCE_CM, PAPER_SCREEN_WIDTH_CM,
                                                 PAPER_SCREEN_WIDTH_PX)
 
-    parser.add_argument("image", metavar="IMAGE", help="the stimulus as shown (PNG; EXR is sRGB-encoded)")
-    parser.add_argument("fixations", metavar="FIXATIONS.csv",
+    from . import argtypes
+
+    parser.add_argument("image", metavar="IMAGE", type=argtypes.input_file(what="image file"),
+                        help="the stimulus as shown (PNG; EXR is sRGB-encoded)")
+    parser.add_argument("fixations", metavar="FIXATIONS.csv", type=argtypes.input_file(what="fixations file"),
                         help="rows of x, y (image pixels, top-left origin), duration_ms")
-    parser.add_argument("--out", required=True, metavar="FILE.png", help="the hotspot plot")
-    parser.add_argument("--max-ms", type=float, default=4000.0,
+    parser.add_argument("--out", required=True, metavar="FILE.png", type=argtypes.output_file(".png"),
+                        help="the hotspot plot")
+    parser.add_argument("--max-ms", type=argtypes.POSITIVE, default=4000.0,
                         help="total duration that lights a pixel fully (default 4000, the paper's)")
-    parser.add_argument("--distance-cm", type=float, default=PAPER_DISTANCE_CM,
+    parser.add_argument("--distance-cm", type=argtypes.POSITIVE, default=PAPER_DISTANCE_CM,
                         help=f"viewing distance (default {PAPER_DISTANCE_CM:g} cm)")
-    parser.add_argument("--screen-width-cm", type=float, default=round(PAPER_SCREEN_WIDTH_CM, 2),
+    parser.add_argument("--screen-width-cm", type=argtypes.POSITIVE, default=round(PAPER_SCREEN_WIDTH_CM, 2),
                         help="visible width of the display (default: the paper's 17\" 5:4, "
                              f"{PAPER_SCREEN_WIDTH_CM:.2f} cm)")
-    parser.add_argument("--screen-width-px", type=int, default=PAPER_SCREEN_WIDTH_PX,
+    parser.add_argument("--screen-width-px", type=argtypes.PIXELS, default=PAPER_SCREEN_WIDTH_PX,
                         help=f"horizontal resolution of the display (default {PAPER_SCREEN_WIDTH_PX})")
-    parser.add_argument("--sigma-deg", type=float, default=1.0,
+    parser.add_argument("--sigma-deg", type=argtypes.POSITIVE, default=1.0,
                         help="standard deviation of the Gaussian in degrees of visual angle (default 1)")
 
 
 def run(args) -> int:
     import numpy as np
 
-    from ...core.errors import InputError
-    from ...core.imageio import linear_to_srgb, read_image, write_png
+    from ...core.imageio import image_is_float, linear_to_srgb, read_image, write_png
     from ...core.psychophysics.hotspots import (fixation_duration_map, hotspot_image,
                                                 pixels_per_degree, read_fixations)
 
-    if not args.out.lower().endswith(".png"):
-        raise InputError(f"--out must be a .png file, not {args.out}")
-    if args.max_ms <= 0 or not np.isfinite(args.max_ms):
-        raise InputError("--max-ms must be a positive number")
-    if args.sigma_deg <= 0 or not np.isfinite(args.sigma_deg):
-        raise InputError("--sigma-deg must be a positive number")
     per_degree = pixels_per_degree(args.distance_cm, args.screen_width_cm, args.screen_width_px)
     fixations = read_fixations(args.fixations)
     stimulus = read_image(args.image)
-    if args.image.lower().endswith((".exr", ".hdr")):   # linear radiance: encode for display
+    if image_is_float(args.image):          # linear radiance (EXR, HDR): encode for display
         stimulus = linear_to_srgb(stimulus)
     channels = stimulus.shape[2]
     rgb = (stimulus[:, :, :3] if channels >= 3 else np.repeat(stimulus[:, :, :1], 3, axis=2))

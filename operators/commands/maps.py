@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...core.errors import InputError
+from . import argtypes
 from .common import (add_map_arguments, add_scene_arguments, map_options_from_args,
                      parse_resolution, warnings_as_lines)
 
@@ -18,7 +18,8 @@ HELP = "compute the Z, X, snapshot, S, L, XS and XSL maps of the active camera"
 
 def add_arguments(parser) -> None:
     add_scene_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="DIR", help="folder for the maps")
+    parser.add_argument("--out", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="folder for the maps")
     add_map_arguments(parser)
 
 
@@ -27,8 +28,6 @@ def run(args) -> int:
     options = map_options_from_args(args)
     size = parse_resolution(args.resolution)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} exists and is not a folder")
 
     import bpy
 

@@ -18,18 +18,30 @@ HELP = ("render (or find in the cache) the converged reference of a scene: unifo
 
 def add_arguments(parser) -> None:
     from ...core.validation.reference import REFERENCE_SEED
+    from . import argtypes
     from .common import add_scene_arguments
 
     add_scene_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="REF.exr", help="where to write the reference")
-    parser.add_argument("--spp", type=int, metavar="N",
+    parser.add_argument("--out", required=True, metavar="REF.exr", type=argtypes.output_file(".exr"),
+                        help="where to write the reference")
+    parser.add_argument("--spp", type=argtypes.SAMPLES, metavar="N",
                         help="samples per pixel (default max(1024, 16 x the ceiling))")
-    parser.add_argument("--seed", type=int, default=REFERENCE_SEED,
+    parser.add_argument("--seed", type=argtypes.SEED, default=REFERENCE_SEED,
                         help=f"Cycles seed (default {REFERENCE_SEED}; contestants use 0, 1, 2, ...)")
-    parser.add_argument("--max-spp", type=int, metavar="CEILING",
+    parser.add_argument("--max-spp", type=ceiling, metavar="CEILING",
                         help="the contestants' ceiling the default samples follow (default: the "
                              "scene's own Cycles samples)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def ceiling(text: str) -> int:
+    """A contestants' ceiling whose default reference (16 x it) Cycles can still render."""
+    from ...core.checks import MAX_SAMPLES
+    from ...core.validation.reference import SPP_PER_CEILING
+    from . import argtypes
+
+    limit = f" (its reference takes {SPP_PER_CEILING}x as many samples; Cycles' limit)"
+    return argtypes.integer(1, MAX_SAMPLES // SPP_PER_CEILING, limit)(text)
 
 
 def scene_file(args) -> Path:
@@ -50,14 +62,10 @@ def scene_file(args) -> Path:
 
 
 def run(args) -> int:
-    from ...core.files import check_output_path
-    from ...core.validation.reference import check_reference_options, copy_file, default_reference_spp
+    from ...core.validation.reference import copy_file
     from .common import parse_resolution
 
-    out = check_output_path(args.out, ".exr")
-    check_reference_options(args.spp, args.seed)
-    if args.max_spp is not None:
-        default_reference_spp(args.max_spp)            # InputError for a ceiling below 1
+    out = Path(args.out)                # every option was checked while it was parsed
     resolution = parse_resolution(args.resolution)
 
     from ...addon.scene.blend_session import open_blend

@@ -14,9 +14,11 @@ import sys
 import time
 from pathlib import Path
 
+from ...core.checks import MAX_SAMPLES, distinct_outputs, finite_number
 from ...core.errors import InputError
 from ...core.frames import frame_path, has_frame_marker, parse_frame_range
-from ...core.sampling.render_files import write_render_outputs
+from ...core.sampling.render_files import render_output_paths, write_render_outputs
+from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
                      guided_options_from_args, map_options_from_args, render_options_from_args,
                      warnings_as_lines)
@@ -35,34 +37,59 @@ def add_arguments(parser) -> None:
                              "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
                              "adaptive sampling at equal time; guided: a pilot pass, then the "
                              "rest of --time-budget where the denoised frame keeps its error")
-    parser.add_argument("--max-spp", type=int, default=None,
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None,
                         help="samples per pixel where the map is 1 (every mode but guided, where it "
                              "is an optional per-pixel ceiling)")
-    parser.add_argument("--out", required=True, metavar="FILE.exr", help="the rendered image")
-    parser.add_argument("--stats", metavar="FILE.json", help="write the run's statistics here")
+    parser.add_argument("--out", required=True, metavar="FILE.exr", type=argtypes.output_file(".exr"),
+                        help="the rendered image")
+    parser.add_argument("--stats", metavar="FILE.json", type=argtypes.output_file(),
+                        help="write the run's statistics here")
     parser.add_argument("--frames", metavar="START-END[:STEP]",
                         help="render these frames, each with its own maps (the camera rays are "
                              "cast once while camera and geometry stay still); --out names them "
                              "like Blender: its last run of # becomes the frame number "
                              "(out/frame_####.exr), else 4 digits are added before .exr")
     maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
-    maps.add_argument("--map", metavar="FILE.exr", help="the director map, values in [0, 1] at render size")
-    maps.add_argument("--maps", metavar="DIR", help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
-    maps.add_argument("--save-maps", metavar="DIR", help="also write the maps computed on the fly here")
+    maps.add_argument("--map", metavar="FILE.exr", type=argtypes.input_file(what="director map"),
+                      help="the director map, values in [0, 1] at render size")
+    maps.add_argument("--maps", metavar="DIR", type=argtypes.input_folder("maps folder"),
+                      help="folder of `xsl-render maps`: uses DIR/xs.exr or DIR/xsl.exr")
+    maps.add_argument("--save-maps", metavar="DIR", type=argtypes.output_folder(),
+                      help="also write the maps computed on the fly here")
     add_map_arguments(parser)
     add_tile_arguments(parser)
     budget = parser.add_argument_group("budget (uniform, adaptive)")
-    budget.add_argument("--spp", type=int, help="uniform: samples per pixel")
-    budget.add_argument("--budget-from", metavar="STATS.json",
+    budget.add_argument("--spp", type=argtypes.SAMPLES, help="uniform: samples per pixel")
+    budget.add_argument("--budget-from", metavar="STATS.json", type=argtypes.input_file(what="stats file"),
                         help="stats of a selective run: uniform takes its mean samples, "
                              "adaptive its wall time")
     budget.add_argument("--equal-time", nargs="?", type=float, const=-1.0, metavar="SECONDS",
                         help="uniform: render for this wall time instead (without SECONDS: the "
                              "wall time in --budget-from)")
-    budget.add_argument("--noise-threshold", type=float, default=None,
+    budget.add_argument("--noise-threshold", type=argtypes.number(above=0.0, hi=1.0), default=None,
                         help="adaptive: Cycles' noise threshold (default Cycles' own, 0.01)")
     add_guided_arguments(parser)
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def check(args) -> None:
+    """What relates several options (``cli.py`` runs this before anything else): the files the
+    render writes are distinct files, uniform's --spp stays under the ceiling, guided has its
+    --time-budget (and only guided), every other mode its --max-spp."""
+    distinct_outputs(render_output_paths(args.out, args.stats))
+    if args.mode == "guided":
+        guided_options_from_args(args)
+    elif args.time_budget is not None:
+        raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
+    elif args.max_spp is None:
+        raise InputError(f"--mode {args.mode} needs --max-spp N")
+    if args.spp is not None and args.max_spp is not None and args.spp > args.max_spp:
+        raise InputError(f"--spp {args.spp} is above --max-spp {args.max_spp}, the ceiling of every mode")
+
+
+def outputs_as_a_set(args) -> bool:
+    """One frame's files appear together; an animation keeps each frame as it is done."""
+    return args.frames is None
 
 
 def _read_budget(path: str) -> dict:
@@ -70,17 +97,29 @@ def _read_budget(path: str) -> dict:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise InputError(f"no such stats file: {path}") from None
-    except (OSError, ValueError) as error:
+    except (OSError, ValueError, RecursionError) as error:
         raise InputError(f"cannot read stats file {path}: {str(error).splitlines()[0]}") from None
     if not isinstance(data, dict) or not {"mean_spp", "wall_s"} <= data.keys():
         raise InputError(f"{path} is not the --stats JSON of an xsl-render render run")
+    phases = data.get("phases_s", {})
+    if not isinstance(phases, dict):
+        raise InputError(f"{path}: phases_s must be an object of seconds")
+    # Numbers as a run writes them: finite, not negative, samples Cycles can take.
+    for key, value, hi in (("wall_s", data["wall_s"], None), ("mean_spp", data["mean_spp"], MAX_SAMPLES),
+                           ("phases_s.denoise", phases.get("denoise", 0.0), None)):
+        if isinstance(value, (bool, str)) or not isinstance(value, (int, float)):
+            raise InputError(f"{path}: {key} must be a number, not {value!r}")
+        finite_number(value, lo=0.0, hi=hi, name=f"{path}: {key}")
     return data
 
 
-def _render_budget(stats: dict) -> float:
+def _render_budget(stats: dict, path: str) -> float:
     """Wall time an equal-time run may render for: the selective run's, less its denoising
     (the equal-time run denoises its own frame after Cycles stops, just as long)."""
-    return float(stats["wall_s"]) - float(stats.get("phases_s", {}).get("denoise", 0.0))
+    seconds = float(stats["wall_s"]) - float(stats.get("phases_s", {}).get("denoise", 0.0))
+    if seconds <= 0.0:
+        raise InputError(f"{path} leaves no time to render (wall_s less its denoising is {seconds:g} s)")
+    return seconds
 
 
 def _budget(args) -> dict:
@@ -101,7 +140,7 @@ def _budget(args) -> dict:
             if args.equal_time < 0:
                 if stats is None:
                     raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-                return {"seconds": _render_budget(stats), "from": args.budget_from}
+                return {"seconds": _render_budget(stats, args.budget_from), "from": args.budget_from}
             if args.equal_time <= 0:
                 raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
             return {"seconds": args.equal_time}
@@ -115,7 +154,7 @@ def _budget(args) -> dict:
         if args.equal_time is not None and args.equal_time > 0:
             return {"seconds": args.equal_time}
         if stats is not None:
-            return {"seconds": _render_budget(stats), "from": args.budget_from}
+            return {"seconds": _render_budget(stats, args.budget_from), "from": args.budget_from}
         raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
     return {}
 
@@ -149,8 +188,6 @@ def _compute_map(scene, args, map_options, options):
 def run(args) -> int:
     options = render_options_from_args(args)
     out = Path(args.out)
-    if out.suffix.lower() != ".exr":
-        raise InputError(f"--out must name an .exr file (got {out})")
     frames = _frames(args)
     budget = _budget(args)
     if frames is not None and "map" in budget:

@@ -12,26 +12,36 @@ HELP = "Itti-Koch-Niebur saliency map of any image (no scene needed)"
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("image", metavar="IMAGE",
+    from . import argtypes
+
+    parser.add_argument("image", metavar="IMAGE", type=argtypes.input_file(what="image file"),
                         help="PNG, JPEG, TIFF or EXR (8/16-bit, float, grey, RGB or RGBA); "
                              "float images are scene-linear and get tone mapped")
-    parser.add_argument("--out", required=True, metavar="FILE.exr",
+    parser.add_argument("--out", required=True, metavar="FILE.exr", type=argtypes.output_file(".exr"),
                         help="where to write the map (float32, one channel, image resolution)")
-    parser.add_argument("--png", metavar="FILE.png", help="also write an 8-bit grey preview")
+    parser.add_argument("--png", metavar="FILE.png", type=argtypes.output_file(".png"),
+                        help="also write an 8-bit grey preview")
+
+
+def check(args) -> None:
+    from ...core.checks import distinct_outputs
+
+    distinct_outputs({"--out": args.out, "--png": args.png})
 
 
 def run(args) -> int:
     # Imported here: the other commands should not pay for scikit-image at start-up.
     import time
 
+    from pathlib import Path
+
     from ...core.errors import InputError
-    from ...core.files import check_output_path
     from ...core.imageio import write_exr, write_png
     from ...core.maps.saliency import saliency_map
     from ...core.maps.saliency_input import read_display_rgb
 
-    out = check_output_path(args.out, ".exr")
-    preview = check_output_path(args.png, ".png") if args.png else None
+    out = Path(args.out)
+    preview = Path(args.png) if args.png else None
     rgb = read_display_rgb(args.image)
     started = time.perf_counter()
     smap = saliency_map(rgb)

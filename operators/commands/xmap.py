@@ -13,23 +13,32 @@ import warnings
 from pathlib import Path
 
 from ...core.errors import InputError
+from . import argtypes
 from .common import add_scene_arguments, parse_resolution
 
+#: Midpoint samples per interval: beyond this a reference march takes hours at any size.
+MAX_SAMPLES = 4096
 NAME = "xmap"
 HELP = "compute the Z buffer and the X (extinction) map of the active camera"
 
 
 def add_arguments(parser) -> None:
     add_scene_arguments(parser)
-    parser.add_argument("--out", required=True, metavar="DIR", help="folder for z.exr, x.exr, xmap.json")
+    parser.add_argument("--out", required=True, metavar="DIR", type=argtypes.output_folder(),
+                        help="folder for z.exr, x.exr, xmap.json")
     parser.add_argument("--minbound", action=argparse.BooleanOptionalAction,
                         default=True, help="fill sky pixels with the smallest X (paper's MinBound)")
-    parser.add_argument("--tolerance", type=float, default=None,
+    parser.add_argument("--tolerance", type=argtypes.number(above=0.0, below=1.0), default=None,
                         help="transmittance tolerance of the adaptive ray grid that integrates "
                              "heterogeneous media (smaller is slower and closer; default 0.03)")
-    parser.add_argument("--samples", type=int, default=None,
+    parser.add_argument("--samples", type=argtypes.integer(1, MAX_SAMPLES), default=None,
                         help="march every pixel's ray with this many midpoint samples per "
                              "interval instead of the adaptive grid (slow; a reference)")
+
+
+def check(args) -> None:
+    if args.samples is not None and args.tolerance is not None:
+        raise InputError("--samples and --tolerance exclude each other")
 
 
 def run(args) -> int:
@@ -37,6 +46,7 @@ def run(args) -> int:
 
     from ...addon.maps.xmap import compute_x_map
     from ...addon.scene.blend_session import open_blend
+    from ...addon.scene.state import preserved_scene
     from ...core.files import write_json
     from ...core.imageio import write_exr
     from ...core.maps.camera_rays import SKY_DEPTH, depth_to_exr
@@ -45,22 +55,16 @@ def run(args) -> int:
 
     size = parse_resolution(args.resolution)
     samples = DEFAULT_SAMPLES if args.samples is None else args.samples
-    if samples < 1:
-        raise InputError("--samples must be at least 1")
-    if args.tolerance is not None and not 0.0 < args.tolerance < 1.0:
-        raise InputError("--tolerance must lie between 0 and 1")
-    if args.samples is not None and args.tolerance is not None:
-        raise InputError("--samples and --tolerance exclude each other")
     tolerance = None if args.samples is not None else (args.tolerance or DEFAULT_TOLERANCE)
     scene = open_blend(args.scene, args.scene_name)
-    if args.frame is not None:
-        scene.frame_set(args.frame)
-    if size is not None:
-        # Only the open copy of the file changes; nothing writes the .blend back.
-        scene.render.resolution_x, scene.render.resolution_y = size
-        scene.render.resolution_percentage = 100
     out = Path(args.out)
-    with warnings.catch_warnings(record=True) as caught:
+    # Inside Blender (the batch entry) this is the user's open scene: frame and size go back.
+    with preserved_scene(scene), warnings.catch_warnings(record=True) as caught:
+        if args.frame is not None:
+            scene.frame_set(args.frame)
+        if size is not None:
+            scene.render.resolution_x, scene.render.resolution_y = size
+            scene.render.resolution_percentage = 100
         warnings.simplefilter("always")
         x, z, info = compute_x_map(scene, cache_dir=out, minbound=args.minbound,
                                    depsgraph=bpy.context.evaluated_depsgraph_get(), samples=samples,

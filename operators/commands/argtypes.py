@@ -1,0 +1,116 @@
+"""The kinds of value a command-line option takes, each checked while the command line is
+parsed: before Blender loads, before any work, before anything is written.
+
+An option says what it accepts with ``type=``::
+
+    parser.add_argument("--max-spp", type=argtypes.SAMPLES, ...)
+    parser.add_argument("--time-budget", type=argtypes.number(above=0), ...)
+    parser.add_argument("--out", type=argtypes.output_file(".exr"), ...)
+    parser.add_argument("scene", type=argtypes.SCENE, ...)
+
+A bad value ends the command with exit code 2 and one line, ``xsl-render render: argument
+--max-spp: must be a whole number from 1 to 16777216 (Cycles' limit), not 0``. Paths come
+back as the text given (commands wrap them in ``Path`` as they like); numbers as int or
+float. What relates several options (``--min-spp`` above ``--max-spp``, ``--out`` and
+``--stats`` naming one file) is the command's ``check(args)`` (``operators/cli.py``).
+
+Plain ``type=int`` and ``type=float`` are safe too: the command line's parser maps them to
+:func:`int32` and :func:`finite`, so no option takes NaN, infinity or a number Blender's
+32-bit properties cannot hold.
+"""
+from __future__ import annotations
+
+import argparse
+
+from ...core import checks
+from ...core.errors import InputError
+
+
+def _converter(function, label: str, keep_text: bool = False):
+    """An argparse type: ``function(text)`` (or, ``keep_text``, the text once ``function``
+    accepted it), its InputError as argparse's one-line error."""
+    def convert(text: str):
+        try:
+            value = function(text)
+        except InputError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+        return text if keep_text else value
+    convert.__name__ = label                # argparse names the type in some messages
+    return convert
+
+
+def integer(lo: int = checks.INT32_MIN, hi: int = checks.INT32_MAX, limit: str = ""):
+    """A whole number in [lo, hi]; ``limit`` says whose range it is ("(Cycles' limit)")."""
+    return _converter(lambda text: checks.whole_number(text, lo, hi, limit=limit), "integer")
+
+
+def number(lo: float | None = None, hi: float | None = None, *, above: float | None = None,
+           below: float | None = None):
+    """A finite number, bounded inclusively by lo/hi and exclusively by above/below."""
+    return _converter(lambda text: checks.finite_number(text, lo, hi, above=above, below=below),
+                      "number")
+
+
+def auto_or(kind, word: str = "auto"):
+    """``kind``, or ``word`` for None ("auto", "off")."""
+    def convert(text: str):
+        return None if text == word else kind(text)
+    convert.__name__ = f"{kind.__name__} or {word}"
+    return convert
+
+
+int32 = integer()
+finite = number()
+_CYCLES = " (Cycles' limit)"
+#: Samples per pixel: 1 to Cycles' 2^24.
+SAMPLES = integer(1, checks.MAX_SAMPLES, _CYCLES)
+#: Cycles' seed.
+SEED = integer(0, checks.MAX_SEED, _CYCLES)
+#: A frame Blender can go to.
+FRAME = integer(checks.MIN_FRAME, checks.MAX_FRAME, " (Blender's limits)")
+#: A size in pixels no frame can exceed.
+PIXELS = integer(1, checks.MAX_SIDE)
+#: WxH that Blender can render on this machine; comes back as the text given.
+RESOLUTION = _converter(lambda text: checks.parse_frame_size(text, None), "WxH", keep_text=True)
+POSITIVE = number(above=0.0)
+
+
+def input_file(*suffixes: str, what: str = "file"):
+    """An existing file we may read (with one of ``suffixes``, when given); ``what`` names it
+    in messages ("no such director map: m.exr")."""
+    return _converter(lambda text: checks.readable_file(text, suffixes, what=what), "file",
+                      keep_text=True)
+
+
+def input_folder(what: str = "folder"):
+    """An existing folder we may list."""
+    return _converter(lambda text: checks.readable_folder(text, what=what), "folder",
+                      keep_text=True)
+
+
+def output_file(*suffixes: str):
+    """A file of one of ``suffixes`` that may be written (its folder is made if need be)."""
+    return _converter(lambda text: checks.writable_file(text, suffixes), "file", keep_text=True)
+
+
+def output_folder():
+    """A folder that may be written into (made if need be)."""
+    return _converter(lambda text: checks.writable_folder(text), "folder", keep_text=True)
+
+
+def _scene(text: str) -> None:
+    from ...addon.scene.blend_session import check_blend_file   # reads the header; no bpy
+
+    checks.readable_file(text)
+    check_blend_file(text)
+
+
+#: A .blend file we may read (never written).
+SCENE = _converter(_scene, "SCENE.blend", keep_text=True)
+
+
+def register_safe_numbers(parser: argparse.ArgumentParser) -> None:
+    """Make plain ``type=int`` and ``type=float`` of ``parser`` (and its argument groups)
+    :func:`int32` and :func:`finite`."""
+    parser.register("type", int, int32)
+    parser.register("type", float, finite)
