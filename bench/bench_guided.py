@@ -14,7 +14,7 @@ The issue's targets are printed with each figure: FLIP >= 1.0x everywhere and >=
 road, MSE >= 1.25x on road and balls_b, FLIP over adaptive >= 1.0x on road. Run it on an
 otherwise idle machine (the times are the measure).
 
-    .venv/bin/python bench/bench_guided.py --out bench-guided              # ~1.5 h on 2 cores
+    .venv/bin/python bench/bench_guided.py --out bench-guided --quick      # ~30 min on 2 cores
     .venv/bin/python bench/bench_guided.py --scenes road --quick --repeats 1
 """
 from __future__ import annotations
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("bench-guided"), help="folder of the curves")
     parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated example scenes")
     parser.add_argument("--repeats", type=int, default=3, help="repeats per run; medians (default 3)")
-    parser.add_argument("--resolution", default="512x288", help="render size (default 512x288)")
+    parser.add_argument("--resolution", default=None, help="render size WxH (default: each scene's own)")
     parser.add_argument("--quick", action="store_true", help="uniform, adaptive and guided only")
     args = parser.parse_args(argv)
     scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
@@ -93,15 +93,16 @@ def main(argv=None) -> int:
     if unknown:
         print(f"bench_guided: unknown scene '{unknown[0]}' (choose from {', '.join(SCENES)})", file=sys.stderr)
         return 2
-    width, height = (int(v) for v in args.resolution.lower().split("x"))
+    size = tuple(int(v) for v in args.resolution.lower().split("x")) if args.resolution else None
 
     from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves
 
     _register_bench_curves()
     curves = ("uniform", "adaptive", "guided", "guided_xsl") + (() if args.quick else ("guiding", "xs", "xsl"))
-    lines = [f"bench_guided: {', '.join(scenes)} at {width}x{height}, ceiling 64, median of {args.repeats}"]
+    lines = [f"bench_guided: {', '.join(scenes)} at {args.resolution or 'their own sizes'}, ceiling 64, "
+             f"median of {args.repeats}"]
     for scene in scenes:
-        settings = CurvesSettings(ceiling=64, resolution=(width, height), repeats=args.repeats,
+        settings = CurvesSettings(ceiling=64, resolution=size, repeats=args.repeats,
                                   curves=curves, vdp=False)
         data = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)
         scene_lines = report_scene(scene, data)
