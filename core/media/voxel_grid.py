@@ -145,6 +145,21 @@ class VoxelRegion:
     def empty(self) -> bool:
         return not self.leaves.any()
 
+    def _leaf_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) in index space of the box around the active leaves."""
+        used = np.argwhere(self.leaves)
+        return ((used.min(axis=0) + self.leaf_origin) * LEAF,
+                (used.max(axis=0) + 1 + self.leaf_origin) * LEAF)
+
+    def world_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World-space (lo, hi) box around the active leaves (the object's bounds, as
+        Cycles' camera-in-volume test sees them)."""
+        lo, hi = self._leaf_box()
+        corners = np.array([[(lo, hi)[(k >> axis) & 1][axis] for axis in range(3)]
+                            for k in range(8)], dtype=np.float64)
+        world = _affine(np.linalg.inv(self.world_to_index), corners)
+        return world.min(axis=0), world.max(axis=0)
+
     def contains(self, points: np.ndarray) -> np.ndarray:
         """True where world-space points lie inside an active leaf box."""
         q = _affine(self.world_to_index, np.asarray(points, dtype=np.float64))
@@ -161,9 +176,7 @@ class VoxelRegion:
         is affine, so the ray parameter carries over)."""
         if self.empty:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
-        used = np.argwhere(self.leaves)
-        lo = (used.min(axis=0) + self.leaf_origin) * LEAF
-        hi = (used.max(axis=0) + 1 + self.leaf_origin) * LEAF
+        lo, hi = self._leaf_box()
         m = self.world_to_index
         o = _affine(m, origins)
         d = directions @ m[:3, :3].T
