@@ -28,6 +28,10 @@ from xmap_scenes import (OracleComparison, add, base_scene, ground_and_props,
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
+#: A small frame: the tie pixels are measured with thousands of Cycles samples (by the X
+#: map and again by the oracle), and these scenes are mostly ties.
+SIZE = {"width": 32, "height": 18}
+
 
 def _glass(bpy):
     material = bpy.data.materials.new("glass")
@@ -57,7 +61,7 @@ def _fog(bpy):
 
 def _underwater_camera(bpy, height):
     """A camera at ``height`` over (or under) a water level at z = 0, looking along +y."""
-    return base_scene(bpy, location=(0.0, -2.0, height),
+    return base_scene(bpy, **SIZE, location=(0.0, -2.0, height),
                       rotation=(80.0 if height > 0 else 95.0, 0.0, 10.0))
 
 
@@ -69,7 +73,7 @@ def _seabed(bpy):
 def _fog_box_on_the_ground(bpy, material, lowered=0.0):
     """The issue's set-up: the camera inside a fog box whose bottom face lies on the
     ground (or ``lowered`` below it)."""
-    scene = base_scene(bpy, location=(0.0, -2.0, 1.5), rotation=(60.0, 0.0, 10.0))
+    scene = base_scene(bpy, **SIZE, location=(0.0, -2.0, 1.5), rotation=(60.0, 0.0, 10.0))
     box = add(bpy, "primitive_cube_add", material, size=2, location=(0, 4, 3 - lowered))
     box.scale = (8, 8, 3)
     add(bpy, "primitive_plane_add", size=40, location=(0, 4, 0))
@@ -179,7 +183,7 @@ def test_box_whose_top_face_is_surface_only(blender, height):
 @pytest.mark.parametrize("camera_inside", [True, False])
 def test_fog_box_against_a_wall(blender, camera_inside):
     """A fog box whose side face lies on a wall (x = 4), seen from inside and outside."""
-    scene = base_scene(blender)
+    scene = base_scene(blender, **SIZE)
     ground_and_props(blender)
     add(blender, "primitive_plane_add", size=20, location=(4, 6, 5), rotation=(0, math.radians(90), 0))
     # Off the ground by 0.5: the tie under test is the wall's.
@@ -194,10 +198,10 @@ def test_fog_box_against_a_wall(blender, camera_inside):
 def test_camera_exactly_on_a_boundary(blender, where):
     """The eye on the plane of a fog box's face: rays into the box start inside it."""
     if where == "top face":
-        scene = base_scene(blender, location=(0.0, -2.0, 2.0), rotation=(90.0, 0.0, 10.0))
+        scene = base_scene(blender, **SIZE, location=(0.0, -2.0, 2.0), rotation=(90.0, 0.0, 10.0))
         location, scale = (0, 4, 1.2), (8, 8, 0.8)
     else:
-        scene = base_scene(blender, location=(0.0, -2.0, 1.5), rotation=(80.0, 0.0, 10.0))
+        scene = base_scene(blender, **SIZE, location=(0.0, -2.0, 1.5), rotation=(80.0, 0.0, 10.0))
         location, scale = (0, 4, 2.2), (8, 6, 2)
     ground_and_props(blender)
     add(blender, "primitive_cube_add", _fog(blender), size=2, location=location).scale = scale
@@ -209,7 +213,7 @@ def test_camera_exactly_on_a_boundary(blender, where):
 def test_clip_start_inside_a_volume(blender):
     """The camera outside a fog box, its clip start beyond the box's near face: Cycles
     starts those rays inside the box (its probe runs from the clip start)."""
-    scene = base_scene(blender)
+    scene = base_scene(blender, **SIZE)
     scene.camera.data.clip_start = 3.0
     ground_and_props(blender)
     add(blender, "primitive_cube_add", _fog(blender), size=2, location=(0, 3, 2.3)).scale = (5, 3, 2)
@@ -220,7 +224,7 @@ def test_clip_start_inside_a_volume(blender):
 
 def test_two_fog_boxes_sharing_a_face(blender):
     """Stacked fog layers, the camera in the lower one looking up through the shared face."""
-    scene = base_scene(blender, rotation=(95.0, 0.0, 10.0))
+    scene = base_scene(blender, **SIZE, rotation=(95.0, 0.0, 10.0))
     ground_and_props(blender)
     upper, _ = volume_material(blender, "upper", "ShaderNodeVolumeScatter", density=0.3,
                                color=(0.8, 0.5, 0.3, 1.0))
@@ -235,7 +239,7 @@ def test_two_identical_fog_boxes_count_once(blender):
     """Two boxes with the same faces: at each tie Cycles processes only one of them, so a
     ray enters one box, or leaves the other one never entered, or keeps a box it never
     left: the fog is not the sum of both boxes, more or less by pixel."""
-    scene = base_scene(blender)
+    scene = base_scene(blender, **SIZE)
     ground_and_props(blender)
     other, _ = volume_material(blender, "other", "ShaderNodeVolumeScatter", density=0.3,
                                color=(0.8, 0.5, 0.3, 1.0))
