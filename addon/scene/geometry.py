@@ -28,7 +28,7 @@ import numpy as np
 from ...core.camera import CameraModel
 from ...core.media.grid_nodes import grid_names
 from ...core.media.shader_graph import ShaderGraph, uses_default_coordinates
-from ...core.media.volume_medium import VolumeMedium, check_densities
+from ...core.media.volume_medium import VolumeMedium, check_densities, volume_density_scale
 from .probe import renderable_instances
 from .shader_export import export_volume_graph, has_surface, has_volume
 from .volume_grids import GridReadError, volume_grids
@@ -175,7 +175,10 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                 medium = VolumeMedium(
                     key=f"{ob.name}#{count}:{i}", name=ob.name, kind="volume_object",
                     material=material.name, graph=graph_of(material.node_tree, f"mat:{material.name}"),
-                    world_to_object=np.linalg.inv(m))
+                    world_to_object=np.linalg.inv(m),
+                    # The evaluated volume's setting: geometry nodes that make the grids
+                    # make a new volume, with the default (object space), as Cycles sees it.
+                    density_scale=volume_density_scale(m, ob.data.render.space == "OBJECT"))
                 volume_objects.append((medium, ob.original, m, len(volume_slots),
                                        _volume_interpolation(material)))
                 media.append(medium)
