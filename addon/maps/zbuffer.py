@@ -60,13 +60,14 @@ def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = ""
     hit = np.zeros(len(near), dtype=bool)
     events = [(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))]
     if len(geometry.surfaces.triangles):
-        distances, faces = _first_hits(_bvh(geometry.surfaces), o, d, near, clip)
+        # A surface that is also a volume's face (glass over water) is one event with
+        # it; only then is the face hit needed (asking for it costs the casts 5 %).
+        shared = bool(np.any(geometry.surface_medium >= 0))
+        distances, faces = _first_hits(_bvh(geometry.surfaces), o, d, near, clip, shared)
         hit = np.isfinite(distances)
         t_far[hit] = distances[hit]
         rows = np.flatnonzero(hit)
-        # A surface that is also a volume's face (glass over water) is one event with it.
-        owner = (geometry.surface_medium[faces[rows]] if len(geometry.surface_medium)
-                 else np.full(len(rows), -1))
+        owner = geometry.surface_medium[faces[rows]] if shared else np.full(len(rows), -1)
         events.append((rows, t_far[rows], owner.astype(np.int64)))
     gate = camera_may_be_inside(camera, geometry.volume_bounds)
     intervals = {}
@@ -74,8 +75,11 @@ def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = ""
         shell = geometry.shells.get(name, Triangles.empty())
         intervals[name], (rows, ts) = _volume_intervals(tris, shell, o, d, near, t_far, gate)
         events.append((rows, ts, np.full(len(rows), index, dtype=np.int64)))
-    ray, t, owner = (np.concatenate(part) for part in zip(*events))
-    ties = coincident_events(len(near), ray, t, owner)
+    if intervals:
+        ray, t, owner = (np.concatenate(part) for part in zip(*events))
+        ties = coincident_events(len(near), ray, t, owner)
+    else:                       # one event per ray at most (its surface): nothing can tie
+        ties = np.zeros(len(near), dtype=bool)
     return CameraRays(size=(camera.height, camera.width), window=window, origins=origins,
                       directions=directions, t_near=t_near, t_far=t_far.reshape(shape),
                       hit=hit.reshape(shape), view_axis=camera.view_axis(),
@@ -95,35 +99,50 @@ def _gc_paused():
             gc.enable()
 
 
-def _cast(tree, starts, directions, spans) -> tuple[np.ndarray, np.ndarray]:
-    """Distance to the first hit of each ray (NaN for none) and the face hit (-1); the
-    arguments are lists or iterables of plain tuples, as the BVH takes them fastest."""
+_MISS = (np.nan, -1.0)
+
+
+def _cast(tree, starts, directions, spans, faces: bool = False):
+    """Distance to the first hit of each ray (NaN for none) and, with ``faces``, the face
+    hit (-1; else None); the arguments are lists or iterables of plain tuples, as the BVH
+    takes them fastest. Each result is reduced as it comes (the BVH's vectors freed at
+    once): holding them all, or a second pass over them, cost the road scene 30 %."""
     with _gc_paused():
-        hits = list(map(tree.ray_cast, starts, directions, spans))
-    distance = np.array([np.nan if h[3] is None else h[3] for h in hits], dtype=np.float64)
-    face = np.array([-1 if h[2] is None else h[2] for h in hits], dtype=np.int64)
-    return distance, face
+        if not faces:
+            return np.array([hit[3] if hit[3] is not None else np.nan
+                             for hit in map(tree.ray_cast, starts, directions, spans)],
+                            dtype=np.float64), None
+        flat = []
+        extend = flat.extend
+        for hit in map(tree.ray_cast, starts, directions, spans):
+            extend(_MISS if hit[3] is None else (hit[3], hit[2]))
+    pairs = np.array(flat, dtype=np.float64).reshape(-1, 2)
+    return pairs[:, 0].copy(), pairs[:, 1].astype(np.int64)
 
 
-def _first_hits(tree, o, d, near, clip) -> tuple[np.ndarray, np.ndarray]:
+def _first_hits(tree, o, d, near, clip, faces: bool = False):
     """Distance along each ray from its origin to the first surface in [near, clip) (NaN
-    where there is none) and the face it hits. Perspective rays share their origin (the
-    eye): they are cast from there, and only the few that meet a surface before the clip
-    start are cast again from it."""
+    where there is none) and, with ``faces``, the face it hits (-1; else None).
+    Perspective rays share their origin (the eye): they are cast from there, and only
+    the few that meet a surface before the clip start are cast again from it."""
     if np.all(o == o[0]):
         far = float(clip.max())
-        distance, face = _cast(tree, repeat(tuple(o[0].tolist())), d.tolist(), repeat(far))
+        distance, face = _cast(tree, repeat(tuple(o[0].tolist())), d.tolist(), repeat(far), faces)
         again = np.flatnonzero(distance < near)
         if len(again):
             starts = (o[again] + d[again] * near[again, None]).tolist()
-            later, face[again] = _cast(tree, starts, d[again].tolist(),
-                                       (clip[again] - near[again]).tolist())
+            later, later_face = _cast(tree, starts, d[again].tolist(),
+                                      (clip[again] - near[again]).tolist(), faces)
             distance[again] = near[again] + later
+            if faces:
+                face[again] = later_face
         missed = ~(distance < clip)
-        distance[missed], face[missed] = np.nan, -1
+        distance[missed] = np.nan
+        if faces:
+            face[missed] = -1
         return distance, face
     starts = (o + d * near[:, None]).tolist()
-    distance, face = _cast(tree, starts, d.tolist(), (clip - near).tolist())
+    distance, face = _cast(tree, starts, d.tolist(), (clip - near).tolist(), faces)
     return near + distance, face
 
 
