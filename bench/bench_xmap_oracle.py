@@ -7,7 +7,7 @@ compared, the pixels measured by Cycles at ties, the seconds of the X map and of
 comparison, and what the scene holds. Then the worst seed by each figure, and how many
 seeds pass.
 
-    .venv/bin/python bench/bench_xmap_oracle.py                 # seeds 0-49 (~10 minutes)
+    .venv/bin/python bench/bench_xmap_oracle.py                 # seeds 0-49 (~5 minutes)
     .venv/bin/python bench/bench_xmap_oracle.py --seeds 0-9 --json out.json
 """
 from __future__ import annotations

@@ -7,7 +7,7 @@ percentile <= 0.05 over the pixels with a surface that are not silhouettes
 (``xmap_scenes.silhouettes``: a 3x3 neighbourhood holding sky and a surface, or a depth
 discontinuity).
 
-A handful of seeds runs with the suite; all 50 run with ``-m slow`` (about ten minutes on
+A handful of seeds runs with the suite; all 50 run with ``-m slow`` (about five minutes on
 two cores; ``bench/bench_xmap_oracle.py`` prints the worst seed's figures). A seed that
 fails becomes a named test in ``test_xmap_coincident.py`` (or next to the code at fault)
 before it is fixed.
