@@ -26,6 +26,22 @@ def reference_cache(tmp_path_factory):
         os.environ["XSL_RENDER_CACHE"] = saved
 
 
+def pytest_addoption(parser):
+    parser.addoption("--slow", action="store_true",
+                     help="also run the tests marked slow (the 50-seed X-map oracle suite)")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``slow`` run only when asked for: ``--slow``, or a ``-m`` expression
+    that names them (``-m slow``). A plain run, ``-m "not browser"`` included, leaves them out."""
+    if config.getoption("--slow") or "slow" in (config.getoption("markexpr") or ""):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow")]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if not item.get_closest_marker("slow")]
+
+
 @pytest.fixture
 def blender():
     """The bpy module with an empty factory-settings session (Cycles on the CPU)."""

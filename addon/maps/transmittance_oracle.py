@@ -38,8 +38,11 @@ ORACLE_STEP_RATE = 0.05
 
 def render_transmittance(scene, include: list[VolumeMedium] | None = None, samples: int = 16,
                          scale: float = 1.0, step_rate: float = ORACLE_STEP_RATE,
-                         sky: float = 0.0, resize: bool = True) -> tuple[np.ndarray, float]:
-    """Render exp(-tau) per channel for the whole frame: (H, W, 3) float32, row 0 on top.
+                         sky: float = 0.0, resize: bool = True,
+                         window: tuple[int, int, int, int] | None = None, seed: int = 0,
+                         ) -> tuple[np.ndarray, float]:
+    """Render exp(-tau) per channel for the whole frame: (H, W, 3) float32, row 0 on top
+    (or only ``window``).
 
     Parameters
     ----------
@@ -64,15 +67,27 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
         Emission of the world background: 0 (the oracle proper: only surfaces count) or 1,
         so rays that hit nothing measure the transmittance to infinity, which keeps a
         resized low-resolution render from smearing black sky into the horizon.
+    window : (row0, row1, col0, col1), optional
+        Render only these pixels of the frame (rows from the top, half-open), as a
+        render border cropped to them; the result is the window's size. Only at
+        ``scale`` 1.
+    seed : int
+        Cycles' sampling seed.
 
     Returns
     -------
     (transmittance, seconds)
     """
     start = time.perf_counter()
-    with oracle_scene(scene, include, samples, scale, step_rate, sky):
+    if window is not None and scale != 1.0:
+        raise ValueError("a window of the frame renders at full resolution only")
+    with oracle_scene(scene, include, samples, scale, step_rate, sky, seed):
+        if window is not None:
+            _border_on(scene, window)
         passes = render_passes(scene, ("Combined",))
     rgb = passes["Combined"][:, :, :3]
+    if window is not None:
+        return np.clip(rgb, 0.0, None).astype(np.float32), time.perf_counter() - start
     height, width = _full_size(scene)
     if resize and rgb.shape[:2] != (height, width):
         from skimage.transform import resize
@@ -83,14 +98,15 @@ def render_transmittance(scene, include: list[VolumeMedium] | None = None, sampl
 
 @contextmanager
 def oracle_scene(scene, include: list[VolumeMedium] | None = None, samples: int = 16,
-                 scale: float = 1.0, step_rate: float = ORACLE_STEP_RATE, sky: float = 0.0):
+                 scale: float = 1.0, step_rate: float = ORACLE_STEP_RATE, sky: float = 0.0,
+                 seed: int = 0):
     """The scene set up as the oracle renders it (see ``render_transmittance`` for the
     parameters), for the duration of the block; everything is put back afterwards.
     Render passes inside it with ``cycles_render.render_passes``."""
     import bpy
 
     with preserved_scene(scene) as state, _temporary_slots() as add_slot:
-        _oracle_settings(scene, samples, scale, step_rate)
+        _oracle_settings(scene, samples, scale, step_rate, seed)
         keep_world = include is None or any(m.kind == "world" for m in include)
         keep_slots = None if include is None else {
             (m.name, int(m.key.rsplit(":", 1)[1])) for m in include if m.kind != "world"}
@@ -116,6 +132,18 @@ def oracle_scene(scene, include: list[VolumeMedium] | None = None, samples: int 
                 state.swap_material(ob, index, factory.copy(material, keep, grids), link="OBJECT")
         scene.world = factory.world(scene.world, keep_world, sky)
         yield scene
+
+
+def _border_on(scene, window) -> None:
+    """Render only ``window`` of the frame, cropped (inside ``oracle_scene``, which puts
+    the settings back)."""
+    from ...core.camera import border_for_window
+
+    height, width = _full_size(scene)
+    r = scene.render
+    r.use_border, r.use_crop_to_border = True, True
+    r.border_min_x, r.border_min_y, r.border_max_x, r.border_max_y = border_for_window(
+        window, width, height)
 
 
 def _scene_objects(scene, depsgraph) -> list:
@@ -149,7 +177,7 @@ def _grid_names(ob, depsgraph) -> frozenset:
     return frozenset(grid.name for grid in data.grids)
 
 
-def _oracle_settings(scene, samples: int, scale: float, step_rate: float) -> None:
+def _oracle_settings(scene, samples: int, scale: float, step_rate: float, seed: int = 0) -> None:
     from ..cycles.render import ensure_cycles
 
     ensure_cycles(scene)
@@ -157,7 +185,7 @@ def _oracle_settings(scene, samples: int, scale: float, step_rate: float) -> Non
     c.samples = max(1, int(samples))
     c.use_adaptive_sampling = False
     c.use_denoising = False
-    c.seed = 0
+    c.seed = seed
     c.use_animated_seed = False
     c.max_bounces = 0
     for name in ("diffuse_bounces", "glossy_bounces", "transmission_bounces", "volume_bounces"):

@@ -4,9 +4,15 @@ One ``mathutils`` BVH tree holds every surface triangle in world space; each pix
 ray is cast from its clip start (Cycles starts camera rays there) up to its clip end, and
 stops at the first surface. Each object volume gets its own BVH; rays that reach its
 bounding box are walked through its boundary, entering where they cross a face from the
-front and leaving where they cross one from behind (Cycles' volume stack does the same
-with face orientation), which gives the intervals inside the medium up to the surface.
-The first boundary crossing also tells whether the ray starts inside (camera in the fog).
+front and leaving where they cross one from behind, which gives the intervals inside the
+medium up to the surface. Whether a ray *starts* inside is decided as Cycles decides it
+(``core.maps.volume_stack``): by its camera-in-volume gate and a probe straight up from
+the ray's start through all the object's faces, not by the ray's own first crossing (the
+two differ for open meshes, surface-only faces, flipped normals).
+
+Every volume-face crossing and every first surface is also an *event* of its ray; rays
+with two events of different objects at the same distance are marked in ``ties``: there
+Cycles' answer depends on its rounding, and the X map asks Cycles.
 """
 from __future__ import annotations
 
@@ -18,11 +24,14 @@ import numpy as np
 
 from ...core.camera import CameraModel
 from ...core.maps.camera_rays import CameraRays, MediumIntervals
+from ...core.maps.volume_stack import (TIE_TOLERANCE, camera_may_be_inside, coincident_events,
+                                       probe_inside)
 from ..scene.geometry import SceneGeometry, Triangles
 
 #: Crossings followed per ray and volume before giving up (a closed mesh needs 2 each time
 #: the ray passes through it).
 _MAX_CROSSINGS = 256
+_UP = (0.0, 0.0, 1.0)
 
 
 def _bvh(tris: Triangles):
@@ -32,8 +41,14 @@ def _bvh(tris: Triangles):
                                 all_triangles=True)
 
 
+def _normals(tris: Triangles) -> np.ndarray:
+    v = tris.vertices[tris.triangles]
+    return np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+
+
 def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = "") -> CameraRays:
-    """The Z buffer of ``camera`` over its render window, with every volume's intervals."""
+    """The Z buffer of ``camera`` over its render window, with every volume's intervals
+    and the rays whose events coincide (``CameraRays.ties``)."""
     window = camera.pixel_window()
     origins, directions = camera.pixel_rays(window)
     t_near, t_clip = camera.clip_range(directions)
@@ -43,16 +58,32 @@ def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = ""
     near, clip = t_near.ravel(), t_clip.ravel()
     t_far = clip.copy()
     hit = np.zeros(len(near), dtype=bool)
+    events = [(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))]
     if len(geometry.surfaces.triangles):
-        distances = _first_hits(_bvh(geometry.surfaces), o, d, near, clip)
+        # A surface that is also a volume's face (glass over water) is one event with
+        # it; only then is the face hit needed (asking for it costs the casts 5 %).
+        shared = bool(np.any(geometry.surface_medium >= 0))
+        distances, faces = _first_hits(_bvh(geometry.surfaces), o, d, near, clip, shared)
         hit = np.isfinite(distances)
         t_far[hit] = distances[hit]
-    intervals = {name: _volume_intervals(tris, o, d, near, t_far)
-                 for name, tris in geometry.volumes.items()}
+        rows = np.flatnonzero(hit)
+        owner = geometry.surface_medium[faces[rows]] if shared else np.full(len(rows), -1)
+        events.append((rows, t_far[rows], owner.astype(np.int64)))
+    gate = camera_may_be_inside(camera, geometry.volume_bounds)
+    intervals = {}
+    for index, (name, tris) in enumerate(geometry.volumes.items()):
+        shell = geometry.shells.get(name, Triangles.empty())
+        intervals[name], (rows, ts) = _volume_intervals(tris, shell, o, d, near, t_far, gate)
+        events.append((rows, ts, np.full(len(rows), index, dtype=np.int64)))
+    if intervals:
+        ray, t, owner = (np.concatenate(part) for part in zip(*events))
+        ties = coincident_events(len(near), ray, t, owner)
+    else:                       # one event per ray at most (its surface): nothing can tie
+        ties = np.zeros(len(near), dtype=bool)
     return CameraRays(size=(camera.height, camera.width), window=window, origins=origins,
                       directions=directions, t_near=t_near, t_far=t_far.reshape(shape),
                       hit=hit.reshape(shape), view_axis=camera.view_axis(),
-                      intervals=intervals, key=key)
+                      intervals=intervals, key=key, ties=ties.reshape(shape))
 
 
 @contextmanager
@@ -68,32 +99,51 @@ def _gc_paused():
             gc.enable()
 
 
-def _cast(tree, starts, directions, spans) -> np.ndarray:
-    """Distance to the first hit of each ray (NaN for none); arguments are lists or
-    iterables of plain tuples, as the BVH takes them fastest."""
+_MISS = (np.nan, -1.0)
+
+
+def _cast(tree, starts, directions, spans, faces: bool = False):
+    """Distance to the first hit of each ray (NaN for none) and, with ``faces``, the face
+    hit (-1; else None); the arguments are lists or iterables of plain tuples, as the BVH
+    takes them fastest. Each result is reduced as it comes (the BVH's vectors freed at
+    once): holding them all, or a second pass over them, cost the road scene 30 %."""
     with _gc_paused():
-        return np.array([result[3] if result[3] is not None else np.nan
-                         for result in map(tree.ray_cast, starts, directions, spans)],
-                        dtype=np.float64)
+        if not faces:
+            return np.array([hit[3] if hit[3] is not None else np.nan
+                             for hit in map(tree.ray_cast, starts, directions, spans)],
+                            dtype=np.float64), None
+        flat = []
+        extend = flat.extend
+        for hit in map(tree.ray_cast, starts, directions, spans):
+            extend(_MISS if hit[3] is None else (hit[3], hit[2]))
+    pairs = np.array(flat, dtype=np.float64).reshape(-1, 2)
+    return pairs[:, 0].copy(), pairs[:, 1].astype(np.int64)
 
 
-def _first_hits(tree, o, d, near, clip) -> np.ndarray:
-    """Distance along each ray from its origin to the first surface in [near, clip), NaN
-    where there is none. Perspective rays share their origin (the eye): they are cast
-    from there, and only the few that meet a surface before the clip start are cast
-    again from it."""
+def _first_hits(tree, o, d, near, clip, faces: bool = False):
+    """Distance along each ray from its origin to the first surface in [near, clip) (NaN
+    where there is none) and, with ``faces``, the face it hits (-1; else None).
+    Perspective rays share their origin (the eye): they are cast from there, and only
+    the few that meet a surface before the clip start are cast again from it."""
     if np.all(o == o[0]):
         far = float(clip.max())
-        distance = _cast(tree, repeat(tuple(o[0].tolist())), d.tolist(), repeat(far))
+        distance, face = _cast(tree, repeat(tuple(o[0].tolist())), d.tolist(), repeat(far), faces)
         again = np.flatnonzero(distance < near)
         if len(again):
             starts = (o[again] + d[again] * near[again, None]).tolist()
-            later = _cast(tree, starts, d[again].tolist(), (clip[again] - near[again]).tolist())
+            later, later_face = _cast(tree, starts, d[again].tolist(),
+                                      (clip[again] - near[again]).tolist(), faces)
             distance[again] = near[again] + later
-        distance[~(distance < clip)] = np.nan
-        return distance
+            if faces:
+                face[again] = later_face
+        missed = ~(distance < clip)
+        distance[missed] = np.nan
+        if faces:
+            face[missed] = -1
+        return distance, face
     starts = (o + d * near[:, None]).tolist()
-    return near + _cast(tree, starts, d.tolist(), (clip - near).tolist())
+    distance, face = _cast(tree, starts, d.tolist(), (clip - near).tolist(), faces)
+    return near + distance, face
 
 
 def _segment_hits_box(o, d, t0, t1, lo, hi):
@@ -109,10 +159,11 @@ def _segment_hits_box(o, d, t0, t1, lo, hi):
         return (near <= far + pad) & (far >= t0 - pad) & (near <= t1 + pad)
 
 
-def _convex_intervals(tris: Triangles, normals, o, d, near, far):
-    """Inside intervals of rays through a convex closed mesh with outward faces (a box,
-    a sphere: most fog containers), as the intersection of the faces' half-spaces: no
-    ray cast at all. None when the mesh is not such a solid (then each ray is walked)."""
+def _convex_crossings(tris: Triangles, normals, o, d):
+    """Where rays enter and leave a convex closed mesh with outward faces (a box, a
+    sphere: most fog containers), as the intersection of the faces' half-spaces: no ray
+    cast at all. (enter, leave) per ray, enter > leave where a ray misses it; None when
+    the mesh is not such a solid (then each ray is walked)."""
     length = np.linalg.norm(normals, axis=1)
     keep = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
     if keep.sum() < 4:
@@ -136,73 +187,148 @@ def _convex_intervals(tris: Triangles, normals, o, d, near, far):
     outside = np.any((np.abs(facing) <= 1e-15) & (distance < 0.0), axis=1)
     enter = np.max(np.where(facing < -1e-15, t, -np.inf), axis=1)
     leave = np.min(np.where(facing > 1e-15, t, np.inf), axis=1)
-    t0 = np.maximum(enter, near)
-    t1 = np.minimum(leave, far)
-    return ~outside & (t1 > t0), t0, t1
+    leave[outside] = -np.inf
+    return enter, leave
 
 
-def _volume_intervals(tris: Triangles, o, d, near, far) -> MediumIntervals:
-    """Pieces [t0, t1) of each ray inside the closed mesh ``tris``, within [near, far).
+def _in_window(t, near, far):
+    """Crossings that count as events: from the clip start to just past the surface
+    (a face that coincides with the surface may round to either side of it)."""
+    return (t >= near) & (t <= far + TIE_TOLERANCE * np.maximum(1.0, np.abs(far)))
 
-    All candidate rays advance together, one boundary crossing per round: the casts of a
+
+def _volume_intervals(tris: Triangles, shell: Triangles, o, d, near, far, gate: bool):
+    """Pieces [t0, t1) of each ray inside the volume bounded by ``tris``, within
+    [near, far), and the crossings of its faces as events (ray index, distance).
+
+    ``shell`` holds the object's other faces, which only the camera-in-volume probe sees;
+    ``gate`` is Cycles' camera-in-volume gate (False: every ray starts outside). All
+    candidate rays advance together, one boundary crossing per round: the casts of a
     round go through ``map`` (no Python loop body per ray) and the bookkeeping is numpy.
     Whether a crossing enters or leaves comes from the winding of the face hit (its
     normal against the ray), as Cycles' volume stack decides it."""
     empty = MediumIntervals(np.zeros(0, np.int32), np.zeros(0), np.zeros(0))
+    no_events = (np.zeros(0, np.int64), np.zeros(0))
     if not len(tris.triangles):
-        return empty
+        return empty, no_events
     lo, hi = tris.bounds()
-    # A ray may start inside the box; its first crossing (possibly beyond ``far``) says
-    # whether it starts inside the medium, so test the ray to infinity for candidates.
-    ray = np.flatnonzero(_segment_hits_box(o, d, near, far, lo, hi))
-    if not len(ray):
-        return empty
-    v = tris.vertices[tris.triangles]
-    normals = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    convex = _convex_intervals(tris, normals, o[ray], d[ray], near[ray], far[ray])
+    touching = _segment_hits_box(o, d, near, far, lo, hi)
+    normals = _normals(tris)
+    ray = np.flatnonzero(touching)
+    convex = None
+    if len(ray) and not len(shell.triangles):
+        convex = _convex_crossings(tris, normals, o[ray], d[ray])
     if convex is not None:
-        keep, t0, t1 = convex
-        return MediumIntervals(ray[keep].astype(np.int32), t0[keep], t1[keep])
+        enter, leave = convex
+        # A closed convex mesh: the probe says "inside" exactly where the ray starts
+        # between entering and leaving; without the gate nothing starts inside, and a
+        # ray that starts inside never enters again.
+        starts_inside = (enter < near[ray]) & (leave > near[ray])
+        keep_start = gate | ~starts_inside
+        t0 = np.maximum(enter, near[ray])
+        t1 = np.minimum(leave, far[ray])
+        keep = keep_start & (t1 > t0)
+        through = enter < leave                         # rays that really pass through it
+        crossings = np.concatenate([enter[through], leave[through]])
+        owner = np.concatenate([ray[through], ray[through]])
+        counted = _in_window(crossings, near[owner], far[owner]) & np.isfinite(crossings)
+        return (MediumIntervals(ray[keep].astype(np.int32), t0[keep], t1[keep]),
+                (owner[counted].astype(np.int64), crossings[counted]))
+    # Any mesh: the probe decides where each ray starts, and a ray that starts inside
+    # an open mesh may never come near its faces.
+    inside = _probe(tris, shell, o + d * near[:, None]) if gate else np.zeros(len(o), dtype=bool)
+    ray = np.flatnonzero(touching | inside)
+    if not len(ray):
+        return empty, no_events
+    return _walk(tris, normals, ray, inside[ray], o, d, near, far)
+
+
+def _probe(tris: Triangles, shell: Triangles, points) -> np.ndarray:
+    """Cycles' camera-in-volume probe from each of ``points`` straight up (+Z) through
+    every face of the object: (len(points),) bool, see ``core.maps.volume_stack``."""
+    inside = np.zeros(len(points), dtype=bool)
+    faces = Triangles.concatenate([tris, shell])
+    lo, hi = faces.bounds()
+    # Only points under the object's box can meet its faces going up.
+    below = np.flatnonzero(np.all((points[:, :2] >= lo[:2]) & (points[:, :2] <= hi[:2]), axis=1)
+                           & (points[:, 2] <= hi[2]))
+    if not len(below):
+        return inside
+    has_volume = np.arange(len(faces.triangles)) < len(tris.triangles)
+    front_of = _normals(faces)[:, 2] < 0.0            # seen from below: the normal points down
+    cast = _bvh(faces).ray_cast
+    t = np.zeros(len(below))
+    found_ray, found_t, found_front, found_volume = [], [], [], []
+    active = np.arange(len(below))
+    for _ in range(_MAX_CROSSINGS):
+        if not len(active):
+            break
+        starts = points[below[active]] + np.array(_UP) * t[active, None]
+        with _gc_paused():
+            hits = list(map(cast, starts.tolist(), repeat(_UP)))
+        face = np.array([-1 if h[2] is None else h[2] for h in hits], dtype=np.int64)
+        distance = np.array([0.0 if h[3] is None else h[3] for h in hits], dtype=np.float64)
+        got = face >= 0
+        rows, face, at = active[got], face[got], t[active[got]] + distance[got]
+        found_ray.append(rows)
+        found_t.append(at)
+        found_front.append(front_of[face])
+        found_volume.append(has_volume[face])
+        # A front face (entered) or a back face with a volume decides; go on past others.
+        undecided = ~front_of[face] & ~has_volume[face]
+        t[rows] = at + 1e-6 * np.maximum(1.0, np.abs(at))
+        active = rows[undecided]
+    decided = probe_inside(len(below), np.concatenate(found_ray), np.concatenate(found_t),
+                           np.concatenate(found_front), np.concatenate(found_volume))
+    inside[below] = decided
+    return inside
+
+
+def _walk(tris: Triangles, normals, ray, inside, o, d, near, far):
+    """Intervals and events of ``ray`` through a mesh volume, crossing by crossing, each
+    ray starting ``inside`` or not."""
     cast = _bvh(tris).ray_cast
     t = near[ray].astype(np.float64)
     end = far[ray].astype(np.float64)
-    inside = np.full(len(ray), -1, dtype=np.int8)     # -1: not known until the first crossing
+    inside = inside.copy()
     entered_at = t.copy()
     found_ray, found_t0, found_t1 = [], [], []
+    event_ray, event_t = [], []
     active = np.arange(len(ray))
     for _ in range(_MAX_CROSSINGS):
         if not len(active):
             break
         rows = ray[active]
         starts = o[rows] + d[rows] * t[active, None]
-        hits = list(map(cast, starts.tolist(), d[rows].tolist()))
+        with _gc_paused():
+            hits = list(map(cast, starts.tolist(), d[rows].tolist()))
         face = np.array([-1 if h[2] is None else h[2] for h in hits], dtype=np.int64)
         distance = np.array([np.nan if h[3] is None else h[3] for h in hits], dtype=np.float64)
         missed = face < 0
         crossing = t[active] + np.where(missed, 0.0, distance)
         entering = np.einsum("ij,ij->i", normals[np.maximum(face, 0)], d[rows]) < 0.0
-        first = ~missed & (inside[active] < 0)
-        inside[active[first]] = (~entering[first]).astype(np.int8)
-        entered_at[active[first]] = near[rows[first]]
-        beyond = ~missed & (crossing >= end[active])
-        go = ~missed & ~beyond
-        now_inside = inside[active] == 1
+        counted = ~missed & _in_window(crossing, near[rows], end[active])
+        event_ray.append(rows[counted])
+        event_t.append(crossing[counted])
+        go = ~missed & (crossing < end[active])
+        now_inside = inside[active]
         enter = go & entering & ~now_inside
         leave = go & ~entering & now_inside
-        inside[active[enter]] = 1
+        inside[active[enter]] = True
         entered_at[active[enter]] = crossing[enter]
-        inside[active[leave]] = 0
+        inside[active[leave]] = False
         emit = leave & (crossing > entered_at[active])
         found_ray.append(rows[emit])
         found_t0.append(entered_at[active[emit]])
         found_t1.append(crossing[emit])
         t[active[go]] = crossing[go] + 1e-6 * np.maximum(1.0, np.abs(crossing[go]))
         active = active[go]
-    last = (inside == 1) & (end > entered_at)
+    last = inside & (end > entered_at)
     found_ray.append(ray[last])
     found_t0.append(entered_at[last])
     found_t1.append(end[last])
     rays_out = np.concatenate(found_ray).astype(np.int32)
     t0, t1 = np.concatenate(found_t0), np.concatenate(found_t1)
     order = np.lexsort((t0, rays_out))
-    return MediumIntervals(rays_out[order], t0[order], t1[order])
+    return (MediumIntervals(rays_out[order], t0[order], t1[order]),
+            (np.concatenate(event_ray).astype(np.int64), np.concatenate(event_t)))

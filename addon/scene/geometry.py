@@ -4,9 +4,12 @@ One pass over the evaluated depsgraph (instances included, objects hidden from t
 or from camera rays left out) collects, in world space:
 
 * every triangle that stops a camera ray: faces whose material has a surface (or no
-  material, which Cycles renders as its default surface);
+  material, which Cycles renders as its default surface), each with the medium whose
+  volume face it also is (a water box with a glass surface), if any;
 * the boundary of each object volume (faces with a volume-only material are not
-  surfaces: rays pass through them into the medium);
+  surfaces: rays pass through them into the medium), the object's other faces (Cycles'
+  camera-in-volume probe counts them, ``core.maps.volume_stack``), and the bounding box
+  of every object with a volume, volume objects included;
 * the media themselves (``core.media.volume_medium.VolumeMedium``), the world volume first; volume
   objects with the grids their material reads (``addon.scene.volume_grids``), or the reason
   Cycles must measure them instead.
@@ -25,7 +28,7 @@ import numpy as np
 from ...core.camera import CameraModel
 from ...core.media.grid_nodes import grid_names
 from ...core.media.shader_graph import ShaderGraph, uses_default_coordinates
-from ...core.media.volume_medium import VolumeMedium, check_densities
+from ...core.media.volume_medium import VolumeMedium, check_densities, volume_density_scale
 from .probe import renderable_instances
 from .shader_export import export_volume_graph, has_surface, has_volume
 from .volume_grids import GridReadError, volume_grids
@@ -60,9 +63,24 @@ class Triangles:
 
 @dataclass
 class SceneGeometry:
+    """Everything camera rays can meet, in world space.
+
+    ``surface_medium`` (T,) gives for each surface triangle the index into ``volume_keys``
+    of the medium whose volume face it is too, or -1. ``volumes`` holds each mesh medium's
+    boundary (its faces with the volume material), ``shells`` the other faces of the same
+    object. ``volume_bounds`` are the (lo, hi) boxes of all objects with a volume.
+    """
+
     surfaces: Triangles
     volumes: dict[str, Triangles] = field(default_factory=dict)
+    shells: dict[str, Triangles] = field(default_factory=dict)
+    surface_medium: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    volume_bounds: list = field(default_factory=list)
     digest: str = ""
+
+    @property
+    def volume_keys(self) -> list[str]:
+        return list(self.volumes)
 
 
 def _mesh_arrays(ob, cache: dict):
@@ -126,7 +144,10 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             media.append(VolumeMedium(key=f"world:{world.name}", name=world.name, kind="world",
                                       material=None, graph=graph))
     surfaces: list[Triangles] = []
+    surface_medium: list[np.ndarray] = []
     volumes: dict[str, Triangles] = {}
+    shells: dict[str, Triangles] = {}
+    volume_bounds: list = []
     mesh_cache: dict = {}
     seen: dict[str, int] = {}
     kinds: dict = {}
@@ -154,7 +175,10 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                 medium = VolumeMedium(
                     key=f"{ob.name}#{count}:{i}", name=ob.name, kind="volume_object",
                     material=material.name, graph=graph_of(material.node_tree, f"mat:{material.name}"),
-                    world_to_object=np.linalg.inv(m))
+                    world_to_object=np.linalg.inv(m),
+                    # The evaluated volume's setting: geometry nodes that make the grids
+                    # make a new volume, with the default (object space), as Cycles sees it.
+                    density_scale=volume_density_scale(m, ob.data.render.space == "OBJECT"))
                 volume_objects.append((medium, ob.original, m, len(volume_slots),
                                        _volume_interpolation(material)))
                 media.append(medium)
@@ -169,14 +193,20 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
         else:
             slot = np.zeros(len(triangles), dtype=np.int32)
             is_surface = np.ones(len(triangles), dtype=bool)
+        present = [i for i in volume_slots if (slot == i).any()]
+        # Which medium (index into the keys made below) each face is the volume face of.
+        medium_of = np.full(len(triangles), -1, dtype=np.int32)
+        for n, i in enumerate(present):
+            medium_of[slot == i] = len(volumes) + n
         if is_surface.any():
             surfaces.append(_to_world(*_subset(vertices, triangles, is_surface), m))
-        for i in volume_slots:
+            surface_medium.append(medium_of[is_surface])
+        if present:
+            volume_bounds.append(_to_world(vertices, triangles, m).bounds())
+        for i in present:
             material = materials[i]
             key = f"{ob.name}#{count}:{i}"
             boundary = slot == i
-            if not boundary.any():
-                continue
             data = ob.data if ob.type == "MESH" else None
             texspace = None
             if data is not None and hasattr(data, "texspace_location"):
@@ -190,13 +220,20 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                 medium.unsupported = "attribute or volume info nodes on a mesh volume"
             media.append(medium)
             volumes[key] = _to_world(*_subset(vertices, triangles, boundary), m)
+            shells[key] = _to_world(*_subset(vertices, triangles, ~boundary), m)
     # Reading grids adds (and removes) a helper object: only once the walk over the
     # depsgraph's instances is over, which that would invalidate.
     for medium, original, matrix, count, interpolation in volume_objects:
         _attach_grids(medium, scene, original, depsgraph, matrix, count, interpolation)
     for medium in media:
         check_densities(medium)
-    geometry = SceneGeometry(surfaces=Triangles.concatenate(surfaces), volumes=volumes)
+        if medium.kind == "volume_object" and medium.region is not None and not medium.region.empty:
+            volume_bounds.append(medium.region.world_bounds())
+    geometry = SceneGeometry(
+        surfaces=Triangles.concatenate(surfaces), volumes=volumes, shells=shells,
+        surface_medium=(np.concatenate(surface_medium) if surface_medium
+                        else np.zeros(0, dtype=np.int32)),
+        volume_bounds=volume_bounds)
     return geometry, media
 
 
@@ -245,8 +282,14 @@ def geometry_digest(camera: CameraModel, geometry: SceneGeometry) -> str:
                  "pixel_aspect_x", "pixel_aspect_y", "border"):
         digest.update(repr(getattr(camera, name)).encode())
     digest.update(np.ascontiguousarray(camera.matrix_world, dtype=np.float64).tobytes())
-    for tris in [geometry.surfaces] + [geometry.volumes[k] for k in sorted(geometry.volumes)]:
+    keys = sorted(geometry.volumes)
+    for tris in ([geometry.surfaces] + [geometry.volumes[k] for k in keys]
+                 + [geometry.shells[k] for k in keys if k in geometry.shells]):
         digest.update(np.ascontiguousarray(tris.vertices, dtype=np.float32).tobytes())
         digest.update(np.ascontiguousarray(tris.triangles).tobytes())
-    digest.update(repr(sorted(geometry.volumes)).encode())
+    digest.update(repr(keys).encode())
+    digest.update(np.ascontiguousarray(geometry.surface_medium, dtype=np.int32).tobytes())
+    # Volume objects' boxes: their voxels may move the camera-in-volume gate.
+    digest.update(repr([(tuple(np.round(lo, 6)), tuple(np.round(hi, 6)))
+                        for lo, hi in geometry.volume_bounds]).encode())
     return digest.hexdigest()

@@ -19,7 +19,7 @@ from ..files import atomic_path
 
 #: What z.exr holds where no surface is hit: Cycles' own Depth-pass value for "nothing".
 SKY_DEPTH = 1e10
-_CACHE_VERSION = 1
+_CACHE_VERSION = 2
 
 
 @dataclass
@@ -49,6 +49,14 @@ class CameraRays:
     view_axis: np.ndarray                    # (3,) unit vector the camera looks along
     intervals: dict[str, MediumIntervals] = field(default_factory=dict)
     key: str = ""
+    #: (h, w) bool: rays along which a volume face coincides with the first surface or
+    #: with another object's volume face; Cycles resolves those ties by its rounding
+    #: (``core.maps.volume_stack``), so the X map has Cycles measure these pixels.
+    ties: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.ties is None:
+            self.ties = np.zeros(self.t_far.shape, dtype=bool)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -153,7 +161,7 @@ def save_rays(path: str | os.PathLike, rays: CameraRays) -> Path:
         "size": np.array(rays.size), "window": np.array(rays.window),
         "origins": rays.origins, "directions": rays.directions, "t_near": rays.t_near,
         "t_far": rays.t_far, "hit": rays.hit, "view_axis": rays.view_axis,
-        "medium_keys": np.array(list(rays.intervals), dtype=str),
+        "medium_keys": np.array(list(rays.intervals), dtype=str), "ties": rays.ties,
     }
     for i, item in enumerate(rays.intervals.values()):
         arrays[f"ray_{i}"], arrays[f"t0_{i}"], arrays[f"t1_{i}"] = item.ray, item.t0, item.t1
@@ -181,6 +189,6 @@ def load_rays(path: str | os.PathLike, key: str | None = None) -> CameraRays | N
                 window=tuple(int(v) for v in data["window"]),
                 origins=data["origins"], directions=data["directions"], t_near=data["t_near"],
                 t_far=data["t_far"], hit=data["hit"], view_axis=data["view_axis"],
-                intervals=intervals, key=str(data["key"]))
+                intervals=intervals, key=str(data["key"]), ties=data["ties"])
     except (OSError, ValueError, KeyError):
         return None

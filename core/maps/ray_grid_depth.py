@@ -19,11 +19,14 @@ grids are (Cycles would evaluate them there too).
 
 The grid adapts to the field. It starts with nodes every ``FIRST_SPACING`` pixels. Each
 block of it is checked against the grid of half its spacing (whose extra nodes are
-marched for the check): if the transmittance of an interval that starts where the block's
-pixels enter the medium changes by more than ``tolerance``, the block is split in four and each quarter is checked the same way, down
-to one node per pixel, where every pixel's own ray is marched. Accepted blocks keep the
-finer grid's values. The depth step is chosen once per medium on the first grid: halved
-until halving it again moves no transmittance by more than ``tolerance``.
+marched for the check): if the transmittance of an interval that starts where the
+block's pixels enter the medium changes by more than ``tolerance``, the block is split
+in four and each quarter is checked the same way, down to one node per pixel, where
+every pixel's own ray is marched. A medium that is zero outside a known part (a volume
+object's voxels) may be smaller than the spacing: a block whose nodes all miss that part
+while some of its pixels see it is split as well. Accepted blocks keep the finer grid's
+values. The depth step is chosen once per medium on the first grid: halved until halving
+it again moves no transmittance by more than ``tolerance``.
 """
 from __future__ import annotations
 
@@ -92,7 +95,8 @@ class GridReport:
 class _Grid:
     """One medium's integration over one window of rays."""
 
-    def __init__(self, model: RayModel, extinction, shape, index, t0, t1, tolerance):
+    def __init__(self, model: RayModel, extinction, shape, index, t0, t1, tolerance,
+                 visible=None):
         self.model = model
         self.extinction = extinction
         self.height, self.width = shape
@@ -112,6 +116,9 @@ class _Grid:
         self.rows_pad = spacing * -(-self.height // spacing)
         self.cols_pad = spacing * -(-self.width // spacing)
         pad = ((0, self.rows_pad + 1 - self.height), (0, self.cols_pad + 1 - self.width))
+        # Pixels whose rays meet a compact medium's non-zero part (``_blind``).
+        self.visible = None if visible is None else np.pad(
+            np.asarray(visible, dtype=bool).reshape(shape), pad, constant_values=False)
         self.lo_image = np.pad(lo.reshape(shape), pad, constant_values=np.inf)
         self.hi_image = np.pad(hi.reshape(shape), pad, constant_values=-np.inf)
         self._ranges: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -234,6 +241,22 @@ class _Grid:
             (last - first)[:, None] * np.linspace(0.0, 1.0, _STARTS)[None, :]).astype(np.int64)
         return self.t0[order][positions]
 
+    def _blind(self, blocks: np.ndarray, spacing: int) -> np.ndarray:
+        """Blocks with pixels that see a compact medium's non-zero part (``visible``)
+        none of whose node rays do (corners and the check's nodes): a volume object
+        smaller than the spacing, which all nodes pass by and so agree on "empty"."""
+        bi, bj = np.nonzero(blocks)
+        rows, cols, owner = self._children(blocks, spacing)
+        corner_rows, corner_cols = self._corners(blocks, spacing)
+        nodes = self.visible[np.concatenate([rows, corner_rows]), np.concatenate([cols, corner_cols])]
+        seen = np.zeros(len(bi), dtype=bool)
+        np.logical_or.at(seen, np.concatenate([owner, np.tile(np.arange(len(bi)), 4)]), nodes)
+        inside = self.visible[:self.rows_pad, :self.cols_pad].reshape(
+            self.rows_pad // spacing, spacing, self.cols_pad // spacing, spacing).any(axis=(1, 3))
+        out = np.zeros(blocks.shape, dtype=bool)
+        out[bi, bj] = ~seen & inside[bi, bj]
+        return out
+
     def _split_change(self, blocks: np.ndarray, spacing: int) -> np.ndarray:
         """Per block, the largest transmittance change between the block's bilinear
         interpolation and the node rays of the grid of half its spacing (the midpoints of
@@ -348,6 +371,8 @@ class _Grid:
                 change = self._split_change(blocks, spacing)
                 used = spacing // 2
                 accept = blocks & ((change <= self.tolerance) | (used == 1))
+                if self.visible is not None:
+                    accept &= ~self._blind(blocks, spacing)
             mask = np.repeat(np.repeat(accept, spacing, axis=0), spacing, axis=1)
             mask = mask[:self.height, :self.width] & self.has
             chosen[mask] = used
@@ -366,7 +391,7 @@ class _Grid:
 
 def grid_optical_depth(model: RayModel, shape: tuple[int, int], extinction, index: np.ndarray,
                        t0: np.ndarray, t1: np.ndarray, tolerance: float = DEFAULT_TOLERANCE,
-                       ) -> tuple[np.ndarray, GridReport]:
+                       visible: np.ndarray | None = None) -> tuple[np.ndarray, GridReport]:
     """Optical depth (h*w, 3) of one medium over its intervals, on an adaptive ray grid.
 
     Parameters
@@ -382,7 +407,12 @@ def grid_optical_depth(model: RayModel, shape: tuple[int, int], extinction, inde
     tolerance : float
         Largest transmittance change between a grid block and its refinement that is
         accepted (see the module notes).
+    visible : (h*w,) bool array, optional
+        Pixels whose rays meet the non-zero part of a compact field (a volume object's
+        active voxels): a block holding such pixels whose node rays all miss it is
+        split although they agree (``_Grid._blind``).
     """
     grid = _Grid(model, extinction, shape, np.asarray(index, dtype=np.int64),
-                 np.asarray(t0, dtype=np.float64), np.asarray(t1, dtype=np.float64), tolerance)
+                 np.asarray(t0, dtype=np.float64), np.asarray(t1, dtype=np.float64), tolerance,
+                 visible)
     return grid.run(), grid.report

@@ -105,7 +105,8 @@ def optical_depth(rays: CameraRays, media: list[VolumeMedium], samples: int = DE
                 model, fitted = fit_ray_model(rays), True
             if model is not None:
                 grid_tau, grid = grid_optical_depth(model, rays.shape, medium.extinction, index,
-                                                    t0, t1, tolerance)
+                                                    t0, t1, tolerance,
+                                                    visible=_visible_core(rays, medium))
                 tau += grid_tau
                 method = grid.describe()
             else:
@@ -117,6 +118,18 @@ def optical_depth(rays: CameraRays, media: list[VolumeMedium], samples: int = DE
         report.append({"medium": medium.key, "method": method, "intervals": int(len(index)),
                        "seconds": time.perf_counter() - start})
     return tau.reshape(rays.shape + (3,)), report
+
+
+def _visible_core(rays: CameraRays, medium: VolumeMedium) -> np.ndarray | None:
+    """For a volume object, the rays that cross the box of its active voxels: the ray
+    grid must not let all its node rays pass by that (the field is zero around it)."""
+    if medium.kind != "volume_object" or medium.region is None:
+        return None
+    index, _, _ = medium.region.intervals(rays.origins.reshape(-1, 3), rays.directions.reshape(-1, 3),
+                                          rays.t_near.ravel(), rays.t_far.ravel(), core=True)
+    visible = np.zeros(rays.count, dtype=bool)
+    visible[index] = True
+    return visible
 
 
 def _sample_counts(lengths: np.ndarray, samples: int) -> np.ndarray:

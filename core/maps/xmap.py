@@ -49,6 +49,7 @@ def apply_minbound(x: np.ndarray, sky: np.ndarray) -> tuple[np.ndarray, float | 
 def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound: bool = True,
                            extra_tau: np.ndarray | None = None, samples: int = DEFAULT_SAMPLES,
                            tolerance: float | None = DEFAULT_TOLERANCE,
+                           measured: tuple[np.ndarray, np.ndarray] | None = None,
                            ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The X map of ``media`` seen along already cast ``rays``: no ray is cast here.
 
@@ -71,6 +72,10 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
     tolerance : float or None
         Transmittance tolerance of the adaptive ray grid that integrates heterogeneous
         media (``core.maps.ray_grid_depth``); None marches every ray instead (slow; a reference).
+    measured : ((h, w) bool, (h, w, 3)) arrays, optional
+        Pixels whose transmittance was measured elsewhere and replaces ours: the rays
+        where Cycles' answer depends on how it breaks a tie between coincident faces
+        (``CameraRays.ties``), as a Cycles render gave it.
 
     Returns
     -------
@@ -98,6 +103,9 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
         if extra_tau is not None:
             tau = tau + extra_tau
     transmittance = np.exp(-tau).astype(np.float32)
+    if measured is not None:
+        mask, values = measured
+        transmittance[mask] = values[mask]
     x = np.clip(luminance(transmittance), 0.0, 1.0).astype(np.float32)
     sky = ~rays.hit
     info["sky_pixels"] = int(sky.sum())

@@ -28,6 +28,9 @@ class VolumeMedium:
     object carries the grids its material reads (``grids``) and the region where Cycles
     renders it (``region``, a ``core.media.voxel_grid.VoxelRegion``): its extinction is 0
     outside that region, and its ray intervals are found there, not in the ray cache.
+    ``density_scale`` multiplies its extinction: a volume object whose density is given
+    in object space (Blender's default) has Cycles divide the density by the object's
+    scale, so that scaling a smoke down does not thin it out (``volume_density_scale``).
     """
 
     key: str
@@ -41,6 +44,7 @@ class VolumeMedium:
     grids: dict | None = None
     region: object | None = None
     extra: dict = field(default_factory=dict)
+    density_scale: float = 1.0
 
     @property
     def evaluable(self) -> bool:
@@ -65,6 +69,8 @@ class VolumeMedium:
     def extinction(self, points: np.ndarray) -> np.ndarray:
         """Extinction (N, 3) at world-space points."""
         extinction = evaluate_extinction(self.graph, self.context(points))
+        if self.density_scale != 1.0:
+            extinction = extinction * self.density_scale
         if self.region is not None:
             extinction = extinction * self.region.contains(points)[:, None]
         return extinction
@@ -76,6 +82,18 @@ class VolumeMedium:
                 "reason": self.reason,
                 "homogeneous": constant is not None,
                 "extinction": None if constant is None else [float(v) for v in constant]}
+
+
+def volume_density_scale(object_to_world: np.ndarray, object_space: bool) -> float:
+    """What Cycles multiplies a volume object's density by (``object_volume_density`` in
+    its scene/object.cpp). With the density in object space: one over the length of the
+    object's unit diagonal mapped to world space, so a smoke scaled down by s becomes 1/s
+    times denser and keeps its optical depth across it. In world space: 1."""
+    if not object_space:
+        return 1.0
+    diagonal = np.asarray(object_to_world, dtype=np.float64)[:3, :3] @ np.full(3, 1.0 / math.sqrt(3.0))
+    length = float(np.linalg.norm(diagonal))
+    return 1.0 / length if length > 0.0 else 1.0
 
 
 def check_densities(medium: VolumeMedium) -> None:

@@ -107,6 +107,9 @@ class VoxelRegion:
     leaf_origin: np.ndarray            # (3,) int: leaf index of leaves[0, 0, 0]
     index_to_object: np.ndarray        # (4, 4)
     object_to_world: np.ndarray        # (4, 4)
+    #: (lo, hi) index-space box of the active voxels widened by the interpolation's
+    #: reach: the only place the density is not zero (None: the leaves' box).
+    core: tuple | None = None
 
     def __post_init__(self):
         index_to_world = np.asarray(self.object_to_world, np.float64) @ np.asarray(
@@ -138,12 +141,33 @@ class VoxelRegion:
                start[2]:start[2] + active.shape[2]] = active
         leaves = padded.reshape(padded.shape[0] // LEAF, LEAF, padded.shape[1] // LEAF, LEAF,
                                 padded.shape[2] // LEAF, LEAF).any(axis=(1, 3, 5))
-        return VoxelRegion(leaves=leaves, leaf_origin=leaf_lo,
-                           index_to_object=first.index_to_object, object_to_world=object_to_world)
+        core = None
+        if active.any():
+            # Dilated by ``padding`` already: one voxel (linear) or two (cubic) around
+            # the active ones, as far as their interpolation reaches.
+            used = np.argwhere(active)
+            core = (used.min(axis=0) + lo - 1e-3, used.max(axis=0) + lo + 1e-3)
+        return VoxelRegion(leaves=leaves, leaf_origin=leaf_lo, index_to_object=first.index_to_object,
+                           object_to_world=object_to_world, core=core)
 
     @property
     def empty(self) -> bool:
         return not self.leaves.any()
+
+    def _leaf_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) in index space of the box around the active leaves."""
+        used = np.argwhere(self.leaves)
+        return ((used.min(axis=0) + self.leaf_origin) * LEAF,
+                (used.max(axis=0) + 1 + self.leaf_origin) * LEAF)
+
+    def world_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World-space (lo, hi) box around the active leaves (the object's bounds, as
+        Cycles' camera-in-volume test sees them)."""
+        lo, hi = self._leaf_box()
+        corners = np.array([[(lo, hi)[(k >> axis) & 1][axis] for axis in range(3)]
+                            for k in range(8)], dtype=np.float64)
+        world = _affine(np.linalg.inv(self.world_to_index), corners)
+        return world.min(axis=0), world.max(axis=0)
 
     def contains(self, points: np.ndarray) -> np.ndarray:
         """True where world-space points lie inside an active leaf box."""
@@ -155,15 +179,14 @@ class VoxelRegion:
         return inside & self.leaves[leaf[:, 0], leaf[:, 1], leaf[:, 2]]
 
     def intervals(self, origins: np.ndarray, directions: np.ndarray, t_near: np.ndarray,
-                  t_far: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(ray index, t0, t1) where rays cross the box around the active leaves, clipped
-        to [t_near, t_far]. Distances stay those of the world rays (the map to index space
-        is affine, so the ray parameter carries over)."""
+                  t_far: np.ndarray, core: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ray index, t0, t1) where rays cross the box around the active leaves (with
+        ``core``, the tighter box of the active voxels), clipped to [t_near, t_far].
+        Distances stay those of the world rays (the map to index space is affine, so the
+        ray parameter carries over)."""
         if self.empty:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
-        used = np.argwhere(self.leaves)
-        lo = (used.min(axis=0) + self.leaf_origin) * LEAF
-        hi = (used.max(axis=0) + 1 + self.leaf_origin) * LEAF
+        lo, hi = self.core if core and self.core is not None else self._leaf_box()
         m = self.world_to_index
         o = _affine(m, origins)
         d = directions @ m[:3, :3].T

@@ -1,0 +1,119 @@
+"""Which object volumes a camera ray is inside, decided the way Cycles decides it.
+
+The X map must attenuate exactly where Cycles' renders do, and Cycles does not ask
+"is this point inside that mesh": it keeps a *volume stack* per path (intern/cycles,
+``scene/camera.cpp`` ``device_update_volume``, ``kernel/integrator/intersect_volume_stack.h``
+``integrator_volume_stack_init``, ``volume_stack.h``, ``shade_surface.h``). Its rules, each
+checked against renders (``tests/test_xmap_coincident.py``):
+
+* **Gate.** A camera counts as possibly inside an object volume only when the box around
+  its near plane (the corners and centre of the whole frame at the clip start, grown by
+  the clip start on every side) overlaps the bounding box of some object with a volume.
+  If none does, every camera ray starts outside every object volume, even one below an
+  open mesh with a volume material (the world volume is always in).
+* **Probe.** Otherwise each camera ray's start, its point on the near plane, sends a
+  probe straight up (+Z) through every face of every object with a volume, all hits
+  sorted by distance. Per object: a face seen from the front marks the object as entered
+  (whatever its material); a face seen from behind whose material has a volume puts the
+  object on the stack unless it was entered before; a face seen from behind without a
+  volume is passed over. A closed mesh with outward normals gives "inside the mesh"; an
+  open mesh, a mesh whose top is surface-only, flipped normals do not.
+* **Along the ray.** A face whose material has a volume, seen from the front, enters that
+  object's volume (once); seen from behind, leaves it. A face with a surface stops a
+  camera ray (the X map's first surface); one with only a volume is passed through.
+* **Ties.** After each pass-through the ray keeps its origin and only its start distance
+  moves to the next float after the hit, so a second face at *exactly* the same float
+  distance is skipped. Where a volume face coincides with a surface or with another
+  object's volume face (a fog box resting on the floor, a water surface on a water box,
+  two boxes sharing a face), whether a sample stops at the surface, leaves one medium or
+  enters the other depends on Embree's rounding and traversal order: per sample a coin
+  flip whose odds (0 to 1, banded across the frame) no geometric model predicts.
+  :func:`coincident_events` finds those rays; the X map has Cycles measure them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import CameraModel
+
+#: Two events along a ray (volume faces, the first surface) closer than this, relative to
+#: max(1, distance), count as coincident. Faces that coincide in a scene's single-precision
+#: coordinates lie within about 1e-6 of each other; a wider net costs only a Cycles
+#: measurement of pixels whose answer then agrees with ours anyway.
+TIE_TOLERANCE = 1e-5
+
+
+def near_plane_bounds(camera: CameraModel) -> tuple[np.ndarray, np.ndarray]:
+    """Cycles' box around the camera's near plane (``Camera::viewplane_bounds_get``):
+    the four corners and the centre of the whole frame at the clip start, grown by the
+    clip start in every direction (no depth of field)."""
+    xmin, xmax, ymin, ymax, _ = camera.view_plane()
+    near = camera.clip_start
+    xs = np.array([xmin, xmin, xmax, xmax, 0.5 * (xmin + xmax)])
+    ys = np.array([ymin, ymax, ymax, ymin, 0.5 * (ymin + ymax)])
+    if camera.kind == "PERSP":
+        local = np.stack([xs * near, ys * near, np.full(5, -near)], axis=1)
+    else:
+        local = np.stack([xs, ys, np.full(5, -near)], axis=1)
+    matrix = np.asarray(camera.matrix_world, dtype=np.float64)
+    axes = matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0, keepdims=True)
+    points = local @ axes.T + matrix[:3, 3]
+    return points.min(axis=0) - near, points.max(axis=0) + near
+
+
+def camera_may_be_inside(camera: CameraModel, bounds: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Cycles' gate: does the near-plane box overlap any of these (lo, hi) object boxes?"""
+    lo, hi = near_plane_bounds(camera)
+    return any(bool(np.all(lo <= b_hi) and np.all(b_lo <= hi)) for b_lo, b_hi in bounds)
+
+
+def probe_inside(count: int, ray: np.ndarray, t: np.ndarray, front: np.ndarray,
+                 has_volume: np.ndarray) -> np.ndarray:
+    """Whether each of ``count`` rays starts inside one object, from its probe's hits.
+
+    Parameters
+    ----------
+    count : int
+        Number of rays.
+    ray, t, front, has_volume : (K,) arrays
+        The probe hits on the object's faces: which ray's probe, distance along +Z,
+        whether the face was seen from the front, whether its material has a volume.
+
+    Returns
+    -------
+    (count,) bool: the first hit that decides, a front face (entered: outside) or a back
+    face with a volume (inside), is a back face; rays without one start outside.
+    """
+    inside = np.zeros(count, dtype=bool)
+    decides = front | has_volume
+    if not decides.any():
+        return inside
+    ray, t, front = ray[decides], t[decides], front[decides]
+    order = np.lexsort((t, ray))
+    ray, front = ray[order], front[order]
+    first = np.ones(len(ray), dtype=bool)
+    first[1:] = ray[1:] != ray[:-1]
+    inside[ray[first]] = ~front[first]
+    return inside
+
+
+def coincident_events(count: int, ray: np.ndarray, t: np.ndarray, owner: np.ndarray,
+                      tolerance: float = TIE_TOLERANCE) -> np.ndarray:
+    """Rays along which two events of different owners coincide: (count,) bool.
+
+    ``ray``, ``t``, ``owner`` (K,) list every event along every ray: each crossing of an
+    object's volume faces (owner: that medium) and the first surface (owner: the medium
+    whose volume face it also is, or a number of its own when it has none). Crossings of
+    one owner at one distance (a ray through an edge shared by two of its faces) are one
+    event, as they are for Cycles.
+    """
+    ties = np.zeros(count, dtype=bool)
+    if len(ray) < 2:
+        return ties
+    order = np.lexsort((t, ray))
+    ray, t, owner = ray[order], t[order], owner[order]
+    same_ray = ray[1:] == ray[:-1]
+    close = (t[1:] - t[:-1]) <= tolerance * np.maximum(1.0, np.abs(t[1:]))
+    ties[ray[1:][same_ray & close & (owner[1:] != owner[:-1])]] = True
+    return ties
+
