@@ -12,7 +12,7 @@ from ..files import atomic_path
 
 #: Colours and markers per curve (others cycle through matplotlib's defaults).
 STYLES = {"uniform": ("#1f1f1f", "o"), "adaptive": ("#8a5fb0", "s"), "guiding": ("#2a9d8f", "^"),
-          "xs": ("#d9822b", "D"), "xsl": ("#3b6ea5", "v"), "guided": ("#c0392b", "*")}
+          "xs": ("#d9822b", "D"), "xsl": ("#3b6ea5", "v"), "guided": ("#c0392b", "*"), "guided_xsl": ("#e377c2", "P")}
 PANELS = (("flip", "mean HDR-FLIP against the reference"), ("mse", "MSE against the reference"))
 
 
@@ -25,10 +25,12 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
         raise InputError("the plot needs matplotlib (install it from requirements.lock)") from None
     figure = Figure(figsize=(12, 5.2), dpi=110)
     axes = figure.subplots(1, 2)
-    palette = iter(["#7f7f7f", "#bcbd22", "#17becf", "#e377c2", "#8c564b"])
+    palette = iter(["#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#8c564b"])
+    # One style per curve for both panels (the palette is drawn from once per curve).
+    styles = {name: STYLES.get(name) or (next(palette, "#444444"), "o") for name in data["curves"]}
     for axis, (metric, title) in zip(axes, PANELS):
         for name, curve in data["curves"].items():
-            colour, marker = STYLES.get(name, (next(palette, "#444444"), "o"))
+            colour, marker = styles[name]
             runs = [data["runs"][point] for point in curve["points"]]
             line = [(run["seconds"], run[metric]) for run in runs
                     if run["seconds"] and run[metric] is not None and run[metric] > 0]
