@@ -6,7 +6,7 @@ render), denoises it, and scores every tile by how much error it is likely to ke
 denoising: the mean gradient of the denoised pilot's display luminance. Measured on the road
 scene against a converged reference (1024 spp), this score correlates with the per-tile
 error of a denoised 16-spp render as well as the difference of two denoised half-sample
-pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from the low-resolution
+pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from a half-resolution
 pilot), for one cheap pilot instead of two, and the error of a denoised frame sits where the
 image has edges, highlights and glows.
 
