@@ -136,8 +136,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             if have > 1:
                 pilot = renderer.render(None, have, reduce=reduce)
             phases["pilot"] = clock.now() - began
-            pilot_samples = float(np.sum(pilot.samples) if np.ndim(pilot.samples) else
-                                  pilot.samples * pilot.pixels.shape[0] * pilot.pixels.shape[1])
+            # No time limit: every pilot pixel has exactly ``have`` samples.
+            pilot_samples = float(have * pilot.pixels.shape[0] * pilot.pixels.shape[1])
             # Seconds per pixel-sample: a pilot pixel traces what a full one does per sample.
             rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / max(1.0, pilot_samples)
             tiles.append(tile_entry((0, height, 0, width), pilot)
