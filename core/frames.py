@@ -1,4 +1,11 @@
-"""Frame ranges and numbered output names for animations, as Blender names its own frames.
+"""Frame ranges and lists, and numbered output names for animations, as Blender names its
+own frames.
+
+A frame list is what Open Job Description's range expressions accept: ranges and single
+frames joined by commas, ``1-3,8`` or ``1-250:2,300`` (``parse_frame_list``); the command
+line (``render --frames``, ``farm --frames``) and the farm's job template read the same
+text, so a list the template takes is never refused by the command that wrote it. Chunks of
+frames (several frames a task) are built on this parser, not into it.
 
 Blender's rule for an output path (``BLI_path_frame``): the last run of ``#`` in the file
 name (never in a folder name) becomes the frame number, zero-padded to the run's length;
@@ -29,7 +36,8 @@ def parse_frame_range(text: str) -> range:
     """
     match = _RANGE.match(str(text))
     if not match:
-        raise InputError(f"--frames must look like START-END or START-END:STEP (got '{text}')")
+        raise InputError(f"--frames must look like START-END or START-END:STEP, or a list of "
+                         f"them such as 1-3,8 (got '{text}')")
     start = int(match.group(1))
     end = int(match.group(2)) if match.group(2) is not None else start
     step = int(match.group(3)) if match.group(3) is not None else 1
@@ -41,6 +49,40 @@ def parse_frame_range(text: str) -> range:
         raise InputError(f"--frames {text}: frames must lie between {MIN_FRAME} and {MAX_FRAME} "
                          "(Blender's limits)")
     return range(start, end + 1, step)
+
+
+def parse_frame_list(text: str) -> tuple[int, ...]:
+    """``"1-3,8"``, ``"1-250:2,300"``, ``"7"`` (``parse_frame_range`` items joined by commas)
+    -> the frames in ascending order.
+
+    Raises InputError (naming ``--frames``) for a bad item, or for two items whose spans
+    overlap (``1-3,2``; also ``1-9:2,2-8:2``, which share no frame): Open Job Description
+    refuses overlapping ranges, so the command line refuses them first.
+    """
+    return tuple(frame for _, frames in _items(text) for frame in frames)
+
+
+def frame_expression(text: str) -> str:
+    """The canonical text of a frame list: each item as ``A``, ``A-B`` or ``A-B:S``, items in
+    ascending order (``"8, 1-3:1"`` -> ``"1-3,8"``). Checked as ``parse_frame_list`` does."""
+    canonical = []
+    for _, frames in _items(text):
+        start, end, step = frames.start, frames.stop - 1, frames.step
+        canonical.append(str(start) if start == end else
+                         f"{start}-{end}" + (f":{step}" if step != 1 else ""))
+    return ",".join(canonical)
+
+
+def _items(text: str) -> list[tuple[str, range]]:
+    """(item text, its range) of each comma-separated item, by start frame; spans disjoint."""
+    texts = str(text).split(",")
+    if len(texts) > 1 and any(not item.strip() for item in texts):
+        raise InputError(f"--frames {text}: an empty item between commas")
+    items = sorted(((item, parse_frame_range(item)) for item in texts), key=lambda i: i[1].start)
+    for (before, first), (after, second) in zip(items, items[1:]):
+        if second.start <= first.stop - 1:
+            raise InputError(f"--frames {text}: {before.strip()} and {after.strip()} overlap")
+    return items
 
 
 def has_frame_marker(pattern: str) -> bool:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from xsl_render.core.errors import Cancelled, InputError
-from xsl_render.core.frames import frame_path, has_frame_marker, parse_frame_range
+from xsl_render.core.frames import (frame_expression, frame_path, has_frame_marker, parse_frame_list,
+                                    parse_frame_range)
 from xsl_render.core.progress import StepRunner, run_steps, scaled_steps, timed_steps
 
 
@@ -24,6 +25,34 @@ def test_frame_ranges(text, frames):
 def test_bad_frame_ranges(text, message):
     with pytest.raises(InputError, match=message):
         parse_frame_range(text)
+
+
+@pytest.mark.parametrize("text, frames, canonical", [
+    ("1-3,8", [1, 2, 3, 8], "1-3,8"), ("8, 1-3:1", [1, 2, 3, 8], "1-3,8"),
+    ("1-250:2", list(range(1, 251, 2)), "1-250:2"), ("7", [7], "7"), ("5-5", [5], "5"),
+    ("4,3", [3, 4], "3,4"), ("-3-2,10-20:5", [-3, -2, -1, 0, 1, 2, 10, 15, 20], "-3-2,10-20:5"),
+])
+def test_frame_lists(text, frames, canonical):
+    from openjd.model import IntRangeExpr
+
+    assert list(parse_frame_list(text)) == frames
+    assert frame_expression(text) == canonical
+    assert list(IntRangeExpr.from_str(canonical)) == frames       # the farm's template agrees
+
+
+@pytest.mark.parametrize("text, message", [
+    ("1-3,2", "1-3 and 2 overlap"), ("1-9:2,2-8:2", "overlap"), ("1,,2", "an empty item"),
+    ("1-3,", "an empty item"), ("1-3,x", "must look like START-END"), ("3-1,5", "is before"),
+])
+def test_bad_frame_lists(text, message):
+    from openjd.model import IntRangeExpr
+
+    with pytest.raises(InputError, match=message):
+        parse_frame_list(text)
+    with pytest.raises(InputError, match=message):
+        frame_expression(text)
+    with pytest.raises(ValueError):
+        IntRangeExpr.from_str(text.replace(" ", ""))        # nor does the template take it
 
 
 @pytest.mark.parametrize("pattern, frame, path", [

@@ -114,3 +114,10 @@ def register_safe_numbers(parser: argparse.ArgumentParser) -> None:
     :func:`int32` and :func:`finite`."""
     parser.register("type", int, int32)
     parser.register("type", float, finite)
+
+
+# Frame lists live in core/frames.py (the farm's job template reads the same text).
+from ...core.frames import frame_expression as _frame_expression  # noqa: E402
+
+#: Frames: 12, 1-250, 1-250:2 or a list such as 1-3,8; comes back in canonical form.
+FRAMES = _converter(_frame_expression, "FRAMES")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ...core.checks import MAX_SAMPLES, distinct_outputs, finite_number
 from ...core.errors import InputError
-from ...core.frames import frame_path, has_frame_marker, parse_frame_range
+from ...core.frames import frame_path, has_frame_marker, parse_frame_list
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
 from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
@@ -44,9 +44,10 @@ def add_arguments(parser) -> None:
                         help="the rendered image")
     parser.add_argument("--stats", metavar="FILE.json", type=argtypes.output_file(),
                         help="write the run's statistics here")
-    parser.add_argument("--frames", metavar="START-END[:STEP]",
-                        help="render these frames, each with its own maps (the camera rays are "
-                             "cast once while camera and geometry stay still); --out names them "
+    parser.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                        help="render these frames (1-48, 1-48:2 or a list such as 1-3,8), each "
+                             "with its own maps (the camera rays are cast once while camera and "
+                             "geometry stay still); --out names them "
                              "like Blender: its last run of # becomes the frame number "
                              "(out/frame_####.exr), else 4 digits are added before .exr")
     maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
@@ -243,9 +244,9 @@ def run(args) -> int:
 
 
 def _frames(args):
-    """The --frames range (None without it), checked before the scene is opened."""
+    """The --frames list (None without it), checked before the scene is opened."""
     if args.frames is None:
         return None
     if args.frame is not None:
         raise InputError("--frame and --frames cannot be combined")
-    return parse_frame_range(args.frames)
+    return parse_frame_list(args.frames)

@@ -13,11 +13,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from ...core.frames import frame_path
+from ...core.frames import frame_expression, frame_path
 from ...core.sampling.render_files import write_render_outputs
 
 
-def render_frames(scene, args, options, budget: dict, frames: range, out: Path) -> int:
+def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
     from ...addon.animation import frames_steps, guided_frame, selective_frame, single_render_frame
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
@@ -65,7 +65,7 @@ def render_frames(scene, args, options, budget: dict, frames: range, out: Path) 
     if args.stats:
         write_json(args.stats, {
             "mode": args.mode, "file": str(args.scene), "out": str(out),
-            "frames": done, "frame_range": [frames.start, frames.stop - 1, frames.step],
+            "frames": done, "frame_range": frame_expression(args.frames),
             "wall_s": time.perf_counter() - started,
             "total_samples": sum(stats["total_samples"] for stats in done),
             "ray_cache_hits": sum(hits)})
