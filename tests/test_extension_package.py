@@ -75,6 +75,13 @@ def test_manifest_is_complete():
     manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
     assert manifest["schema_version"] == "1.0.0" and manifest["id"] == "xsl_render"
     assert manifest["blender_version_min"] == "4.2.0"
+    # cp311 wheels: Blender 4.2-5.0 (Python 3.11); 5.1 ships a newer Python (exclusive max).
+    assert manifest["blender_version_max"] == "5.1.0"
+    sys.path.insert(0, str(ROOT / "tools"))
+    from build_extension import check_blender_range
+    check_blender_range(manifest, manifest["wheels"])
+    with pytest.raises(SystemExit, match="5.1 ship"):
+        check_blender_range({**manifest, "blender_version_max": "5.2.0"}, manifest["wheels"])
     assert manifest["license"] == ["SPDX:GPL-3.0-or-later"]
     assert manifest["permissions"]["files"]
     excluded = manifest["build"]["paths_exclude_pattern"]

@@ -6,7 +6,9 @@
 2. Downloads each as a binary wheel for every platform of the manifest into ``wheels/``
    (``pip download --only-binary=:all: --platform ...``; nothing is ever compiled).
 3. Checks that the manifest's ``wheels`` list names exactly those files
-   (``--sync-manifest`` rewrites the list instead).
+   (``--sync-manifest`` rewrites the list instead), and that its Blender range
+   (``blender_version_min`` to ``blender_version_max``, the latter exclusive) holds only
+   Blender releases whose Python the binary wheels are built for (``check_blender_range``).
 4. Validates the repository root with Blender's own ``blender_ext.py validate`` and builds
    one zip per platform with ``blender_ext.py build --split-platforms`` into DIR (``dist/``).
 
@@ -34,6 +36,38 @@ PIP_PLATFORMS = {
     "windows-x64": ["win_amd64"],
     "macos-arm64": ["macosx_12_0_arm64", "macosx_11_0_arm64"],
 }
+
+
+#: The Python each Blender release series ships (Blender's release notes, "Python" section);
+#: a binary cp311 wheel loads only in the 3.11 ones. 5.1 moves on to Python 3.13.
+BLENDER_PYTHON = {(4, 2): "311", (4, 3): "311", (4, 4): "311", (4, 5): "311", (5, 0): "311",
+                  (5, 1): "313"}
+
+
+def _release(version: str) -> tuple[int, int]:
+    major, minor = version.split(".")[:2]
+    return int(major), int(minor)
+
+
+def check_blender_range(manifest: dict, wheels: list[str]) -> None:
+    """SystemExit unless every Blender from the manifest's minimum up to (not including) its
+    maximum ships the Python the binary wheels (``-cpXYZ-``) are built for."""
+    tags = {match.group(1) for name in wheels for match in [re.search(r"-cp(\d+)-", name)] if match}
+    if not tags:
+        return                          # pure-Python wheels load in any Blender
+    if "blender_version_max" not in manifest:
+        raise SystemExit(f"build_extension: the wheels are built for cp{'/'.join(sorted(tags))} only; "
+                         "the manifest needs a blender_version_max")
+    low, high = _release(manifest["blender_version_min"]), _release(manifest["blender_version_max"])
+    newest = max(BLENDER_PYTHON)
+    if high > (newest[0], newest[1] + 1):
+        raise SystemExit(f"build_extension: Blender {manifest['blender_version_max']} is past the "
+                         "releases whose Python this tool knows (BLENDER_PYTHON)")
+    covered = [release for release in BLENDER_PYTHON if low <= release < high]
+    wrong = [f"{a}.{b}" for a, b in covered if BLENDER_PYTHON[(a, b)] not in tags]
+    if wrong:
+        raise SystemExit(f"build_extension: Blender {', '.join(wrong)} ship(s) a Python the wheels "
+                         f"(cp{'/'.join(sorted(tags))}) are not built for; lower blender_version_max")
 
 
 def pinned_wheels(lock: Path = ROOT / "requirements.lock") -> list[str]:
@@ -118,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-download", action="store_true", help="use the files already in wheels/")
     args = parser.parse_args(argv)
 
-    platforms = tomllib.loads((ROOT / "blender_manifest.toml").read_text())["platforms"]
+    manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
+    platforms = manifest["platforms"]
     specs = pinned_wheels()
     if args.skip_download:
         paths = sorted({f"./wheels/{n}" for p in platforms for n in wheel_files_for(specs, p)})
@@ -132,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit("build_extension: the manifest's wheels differ from requirements.lock "
                          f"(not listed: {missing}; listed but not pinned: {extra}); "
                          "run with --sync-manifest")
+    check_blender_range(manifest, paths)
     for zip_path in build(args.out):
         print(zip_path)
     return 0
