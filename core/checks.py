@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import operator
 import os
+import stat
 from pathlib import Path
 
 from . import temporaries
@@ -148,24 +149,106 @@ def name_list(text: str, name: str, choices=None, what: str = "name") -> tuple[s
 
 
 # -- files ------------------------------------------------------------------------------------
+#: Where the system does not say (``os.pathconf``): Linux's and macOS's limits.
+DEFAULT_NAME_MAX, DEFAULT_PATH_MAX = 255, 4096
+
+
 def _reason(error: OSError) -> str:
     return (error.strerror or str(error)).lower()
 
 
+def _short(text: str) -> str:
+    """A name shortened for a one-line message (a 300-byte name would fill the line)."""
+    return text if len(text) <= 60 else f"{text[:28]}...{text[-28:]}"
+
+
+def _limits(path: str) -> tuple[int, int]:
+    """(NAME_MAX, PATH_MAX) of the file system ``path`` is on, asked of the nearest folder
+    that exists (the one a new file lands in); ``os.pathconf`` says -1 for no limit."""
+    folder = os.path.dirname(path)
+    while True:
+        try:
+            name_max = os.pathconf(folder, "PC_NAME_MAX")
+            path_max = os.pathconf(folder, "PC_PATH_MAX")
+            break
+        except (OSError, ValueError):
+            parent = os.path.dirname(folder)
+            if parent == folder:
+                return DEFAULT_NAME_MAX, DEFAULT_PATH_MAX
+            folder = parent
+        except AttributeError:          # no pathconf (Windows)
+            return DEFAULT_NAME_MAX, DEFAULT_PATH_MAX
+    unlimited = 1 << 62
+    return (name_max if name_max > 0 else unlimited), (path_max if path_max > 0 else unlimited)
+
+
+def name_fits(path, name: str | None = None, written_as: str | os.PathLike | None = None) -> Path:
+    """``path`` if the system can hold its name: no part longer than the file system's
+    NAME_MAX bytes (usually 255), the whole absolute path shorter than PATH_MAX. Checked
+    before anything else touches the path: past these limits every call fails with "File
+    name too long". ``written_as``: the temporary name an output is written under first
+    (``core.temporaries.temporary_name``), which must fit too."""
+    path = Path(path)
+    _name_within(path, name, _limits(os.path.abspath(path)), written_as)
+    return path
+
+
+def _name_within(path: Path, name: str | None, limits: tuple[int, int],
+                 written_as: str | os.PathLike | None = None) -> None:
+    name_max, path_max = limits
+    absolute = os.fsencode(os.path.abspath(path))
+    if len(absolute) >= path_max:
+        raise InputError(_say(name, f"path too long: {_short(str(path))} ({len(absolute)} bytes; "
+                                    f"the system takes paths shorter than {path_max})"))
+    longest = max(absolute.split(os.fsencode(os.sep)), key=len)
+    if len(longest) > name_max:
+        raise InputError(_say(name, f"file name too long: {_short(os.fsdecode(longest))} "
+                                    f"({len(longest)} bytes; at most {name_max} here)"))
+    if written_as is not None:
+        size = len(os.fsencode(Path(written_as).name))
+        if size > name_max:
+            extra = size - len(os.fsencode(path.name))
+            raise InputError(_say(name, f"file name too long: {_short(path.name)} (written first "
+                                        f"under a temporary name {extra} bytes longer, {size}; at "
+                                        f"most {name_max} here)"))
+
+
+def _not_regular(mode: int) -> str | None:
+    """What a file that is not a regular file or a folder is ("a FIFO"); None if it is one."""
+    for test, what in ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return what
+    return None if stat.S_ISREG(mode) or stat.S_ISDIR(mode) else "not a regular file"
+
+
+def _stat(path: Path, name: str | None, what: str) -> os.stat_result:
+    """``os.stat(path)`` (symlinks followed), its errors as one line."""
+    try:
+        return os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        raise InputError(_say(name, f"no such {what}: {path}")) from None
+    except OSError as error:
+        raise InputError(_say(name, f"cannot read {path}: {_reason(error)}")) from None
+
+
 def readable_file(path, suffixes: tuple[str, ...] = (), name: str | None = None,
                   what: str = "file") -> Path:
-    """``path`` if it is an existing file we may read (and has one of ``suffixes``); ``what``
-    names it in the message ("no such director map: m.exr")."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError(_say(name, f"no such {what}: {path}"))
-    if path.is_dir():
+    """``path`` if it is an existing regular file we may read (and has one of ``suffixes``);
+    ``what`` names it in the message ("no such director map: m.exr"). A FIFO, device or
+    socket is refused without being opened: opening a FIFO waits for a writer, forever."""
+    path = name_fits(path, name)
+    mode = _stat(path, name, what).st_mode
+    if stat.S_ISDIR(mode):
         raise InputError(_say(name, f"{path} is a folder, not a file"))
+    kind = _not_regular(mode)
+    if kind is not None:
+        raise InputError(_say(name, f"{path} is {kind}, not a regular file"))
     if suffixes and path.suffix.lower() not in suffixes:
         raise InputError(_say(name, f"{path} must be a {' or '.join(suffixes)} file"))
     try:
-        with open(path, "rb"):
-            pass
+        # O_NONBLOCK: should the file have become a FIFO since, the open still returns.
+        os.close(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)))
     except OSError as error:
         raise InputError(_say(name, f"cannot read {path}: {_reason(error)}")) from None
     return path
@@ -173,11 +256,10 @@ def readable_file(path, suffixes: tuple[str, ...] = (), name: str | None = None,
 
 def readable_folder(path, name: str | None = None, what: str = "folder") -> Path:
     """``path`` if it is an existing folder whose contents we may list."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError(_say(name, f"no such {what}: {path}"))
-    if not path.is_dir():
-        raise InputError(_say(name, f"{path} is a file, not a folder"))
+    path = name_fits(path, name)
+    mode = _stat(path, name, what).st_mode
+    if not stat.S_ISDIR(mode):
+        raise InputError(_say(name, f"{path} is {_not_regular(mode) or 'a file'}, not a folder"))
     try:
         with os.scandir(path) as entries:
             next(entries, None)
@@ -200,9 +282,10 @@ def _writable_place(folder: Path, target: Path, name: str | None) -> None:
 
 
 def writable_file(path, suffixes: tuple[str, ...] = (), name: str | None = None) -> Path:
-    """``path`` if a file of one of ``suffixes`` may be written there: not a folder or a
-    device, in a folder that exists and takes new files, or can be made where one does."""
-    path = Path(path)
+    """``path`` if a file of one of ``suffixes`` may be written there: a name the system can
+    hold (with the temporary name it is written under first), not a folder or a device, in a
+    folder that exists and takes new files, or can be made where one does."""
+    path = name_fits(path, name, written_as=temporaries.temporary_name(path))
     if path.is_dir():
         raise InputError(_say(name, f"{path} is a folder, not a file"))
     if suffixes and path.suffix.lower() not in suffixes:
@@ -215,23 +298,99 @@ def writable_file(path, suffixes: tuple[str, ...] = (), name: str | None = None)
 
 def writable_folder(path, name: str | None = None) -> Path:
     """``path`` if it is a folder that takes new files, or can be made where one is."""
-    path = Path(path)
+    path = name_fits(path, name)
     if os.path.lexists(path) and not path.is_dir():
         raise InputError(_say(name, f"{path} is a file, not a folder"))
     _writable_place(path, path, name)
     return path
 
 
-def distinct_outputs(paths: dict[str, str | os.PathLike | None]) -> None:
-    """InputError when two of a command's outputs (label -> path; None: not written) are one
-    file, or when one of them is an existing folder: a set of files must be written whole."""
-    seen: dict[str, str] = {}
-    for label, path in paths.items():
+class _Folder:
+    """What :func:`separate_files` asks of a folder once, however many outputs it holds (an
+    animation's frames): its absolute and real paths, its limits, the names in it (None where
+    it cannot be listed) and how much longer than a file's name its temporary name is."""
+
+    def __init__(self, folder: str, name: str):
+        self.absolute = os.path.abspath(folder or os.curdir)
+        self.real = os.path.normcase(os.path.realpath(self.absolute))
+        self.absolute_size = len(os.fsencode(self.absolute))
+        self.limits = _limits(os.path.join(self.absolute, name))
+        try:
+            with os.scandir(self.absolute) as entries:
+                self.names = {entry.name for entry in entries}
+        except OSError:
+            self.names = None
+        self.checked = False                # its own parts fit (the first file's whole check)
+        # The same for every name (a fixed tag around it), measured on one.
+        self.extra = len(os.fsencode(temporaries.temporary_name(os.path.join(folder, name)).name)) \
+            - len(os.fsencode(name))
+
+    def identities(self, path: str, name: str) -> tuple[list, os.stat_result | None]:
+        """The keys under which ``path`` (a file in this folder) is the same file as another:
+        its real path (folder and name) and, where it exists, its device and inode; and its
+        ``os.stat``."""
+        if self.names is not None and name not in self.names:
+            return [("real", self.real, os.path.normcase(name))], None
+        try:
+            info = os.stat(path)
+        except OSError:
+            info = None
+        folder, real_name = os.path.split(os.path.normcase(os.path.realpath(path)))
+        keys = [("real", folder, real_name)]
+        if info is not None:
+            keys.append(("inode", info.st_dev, info.st_ino))
+        return keys, info
+
+
+def separate_files(inputs: dict[str, str | os.PathLike | None],
+                   outputs: dict[str, str | os.PathLike | None]) -> None:
+    """The one check of a command's files before any work (``operators/cli.py``), each given
+    as label -> path (None: not used): every input that exists is a regular file (or a
+    folder), never a FIFO, device or socket; every output has a name the system can hold, with
+    the temporary name it is written under first, and is not a folder; and no output is the
+    same file as an input or as another output. The same file: one real path (symlinks and
+    ``..`` resolved) or, where both exist, one file on disk (hard links). Nothing is opened."""
+    folders: dict[str, _Folder] = {}
+
+    def look(path) -> tuple[str, str, _Folder]:
+        text = os.fspath(path)
+        folder, name = os.path.split(text)
+        if folder not in folders:
+            folders[folder] = _Folder(folder, name or "x")
+        return text, name, folders[folder]
+
+    known: dict[tuple, tuple[str, bool]] = {}       # identity -> (label, an input)
+    for label, path in inputs.items():
         if path is None:
             continue
-        if Path(path).is_dir():
+        name_fits(path, f"{label}:")
+        text, name, place = look(path)
+        keys, info = place.identities(text, name)
+        kind = None if info is None else _not_regular(info.st_mode)
+        if kind is not None:
+            raise InputError(f"{label} {path} is {kind}, not a regular file")
+        for key in keys:
+            known.setdefault(key, (label, True))
+    for label, path in outputs.items():
+        if path is None:
+            continue
+        text, name, place = look(path)
+        name_max, path_max = place.limits
+        size = 4 * len(name)                # at most, in bytes (UTF-8)
+        # The whole check only where a limit may be near: an animation names a million files.
+        if (not place.checked or size + place.extra > name_max
+                or place.absolute_size + 1 + size >= path_max):
+            _name_within(Path(text), f"{label}:", place.limits, temporaries.temporary_name(text))
+            place.checked = True
+        keys, info = place.identities(text, name)
+        if info is not None and stat.S_ISDIR(info.st_mode):
             raise InputError(f"{label} {path} is a folder, not a file")
-        key = os.path.normcase(os.path.realpath(path))
-        if key in seen:
-            raise InputError(f"{seen[key]} and {label} name the same file: {path}")
-        seen[key] = label
+        for key in keys:
+            if key in known:
+                other, an_input = known[key]
+                if an_input:
+                    raise InputError(f"{label} and {other} name the same file: {path} (an "
+                                     "output never replaces an input)")
+                raise InputError(f"{other} and {label} name the same file: {path}")
+        for key in keys:
+            known[key] = (label, False)

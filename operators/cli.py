@@ -3,6 +3,11 @@
 Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(parser)`` and
 ``run(args) -> int``, and optionally:
 
+- ``files(args) -> (inputs, outputs)``: the files its options imply beyond the options
+  themselves (label -> path; ``commands/argtypes.declared_files``), such as a render's
+  ``_spp.exr``; with the options' files they go through one check before anything else
+  (``core.checks.separate_files``): no output is the same file as an input or another
+  output, no input is a FIFO or device, every name fits the system's limits;
 - ``check(args)``: what relates several options, raising InputError; it runs once every
   option was checked on its own (``commands/argtypes.py``) and before ``run``, so a bad
   input is refused before Blender loads or anything is written;
@@ -24,9 +29,10 @@ import sys
 import traceback
 from contextlib import nullcontext
 
+from ..core.checks import separate_files
 from ..core.errors import InputError
 from ..core.files import output_set
-from .commands.argtypes import register_safe_numbers
+from .commands.argtypes import declared_files, file_options, register_safe_numbers
 from .console import blender_chatter_to_log
 
 
@@ -59,7 +65,7 @@ def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
         child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
         child.in_blender = in_blender          # read by commands.common.add_scene_positional
         command.add_arguments(child)
-        child.set_defaults(run=command.run, command=command)
+        child.set_defaults(run=command.run, command=command, file_options=file_options(child))
     return parser
 
 
@@ -78,6 +84,18 @@ def _outputs_as_a_set(command, args) -> bool:
 
 
 def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
+def check_files(args, in_blender: bool = False) -> None:
+    """The command's files (``argtypes.declared_files``) through ``separate_files``; inside
+    Blender the open .blend is an input too."""
+    inputs, outputs = declared_files(args)
+    if in_blender:
+        import bpy
+
+        if bpy.data.filepath:
+            inputs.setdefault("the open file", bpy.data.filepath)
+    separate_files(inputs, outputs)
+
+
     """Run one command; ``watcher``: the command line's signal watcher (``signals.py``)."""
     argv = sys.argv[1:] if argv is None else argv
     try:
@@ -90,6 +108,7 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
     command = args.command
     try:
         if hasattr(command, "check"):
+        check_files(args, in_blender)
             command.check(args)
     except InputError as error:
         print(f"xsl-render: error: {error}", file=sys.stderr)

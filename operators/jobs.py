@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from ..core.checks import writable_file
+from ..core.checks import separate_files, writable_file
 from ..core.errors import InputError
 from ..core.frames import frame_path, has_frame_marker
 from ..core.maps.files import MapSet
 from ..core.panel.settings import guided_options, map_options, render_options, uses_budget
 from ..core.progress import Steps
-from ..core.sampling.render_files import write_render_outputs
+from ..core.sampling.render_files import render_output_paths, write_render_outputs
 
 
 @dataclass
@@ -114,7 +114,7 @@ def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = 
     return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))
 
 
-def still_output(filepath: str) -> str:
+def still_output(filepath: str, frame: int = 0) -> str:
     """The EXR file a still render writes (``filepath`` made absolute), checked before the
     render: the files are EXR as ``xsl-render render`` writes them, whatever the name says
     otherwise, so another extension is refused rather than written as EXR under it. Empty:
@@ -124,15 +124,30 @@ def still_output(filepath: str) -> str:
     if not filepath:
         return ""
     path = bpy.path.abspath(filepath)
-    writable_file(frame_path(path, 0) if has_frame_marker(path) else path, (".exr",),
-                  name="the output path")
+    still = frame_path(path, frame) if has_frame_marker(path) else path
+    writable_file(still, (".exr",), name="the output path")
+    check_outputs([still])
     return path
+
+
+def check_outputs(paths: list[str]) -> None:
+    """The files a render writes (each image with its ``_spp`` files) against the open
+    .blend and each other, as the command line checks them (``core.checks.separate_files``)."""
+    import bpy
+
+    outputs = {}
+    for path in paths:
+        name = Path(path).name
+        outputs.update({f"the output {name}" if label == "--out" else
+                        f"{name}'s {label.removeprefix('its ')}": file
+                        for label, file in render_output_paths(path).items()})
+    separate_files({"the open file": bpy.data.filepath or None}, outputs)
 
 
 def _still_finish(scene, options, filepath: str, gold: bool):
     from ..addon.panel.image_display import show_maps, show_render
 
-    path = still_output(filepath)
+    path = still_output(filepath, scene.frame_current)
 
     def finish(result) -> JobResult:
         outcome = result.outcome
@@ -179,6 +194,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
     if not pattern:
         raise InputError("no output path for the frames: set one in the panel or in Output properties")
     frames = range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step))
+    check_outputs([frame_path(pattern, frame) for frame in frames])
     # frames_steps removes datablocks made during the run, so the images exist beforehand.
     width, height = render_size(scene)
     names = [(GOLD_IMAGE, False), (GOLD_SAMPLES_IMAGE, True)] if gold else \

@@ -3,11 +3,13 @@ before any work, and Blender's limits as Blender itself states them."""
 from __future__ import annotations
 
 import argparse
+import os
 
 import pytest
 
-from xsl_render.core import checks
+from xsl_render.core import checks, temporaries
 from xsl_render.core.errors import InputError
+from xsl_render.core.sampling.render_files import render_output_paths
 from xsl_render.operators.cli import build_parser
 from xsl_render.operators.commands import argtypes
 
@@ -56,10 +58,55 @@ def test_a_frame_size_that_fits_is_kept():
 
 def test_outputs_of_one_command_must_be_distinct_files(tmp_path):
     with pytest.raises(InputError, match="--a and --b name the same file"):
-        checks.distinct_outputs({"--a": tmp_path / "x.json", "--b": tmp_path / "." / "x.json"})
+        checks.separate_files({}, {"--a": tmp_path / "x.json", "--b": tmp_path / "." / "x.json"})
     with pytest.raises(InputError, match="is a folder"):
-        checks.distinct_outputs({"--a": tmp_path})
-    checks.distinct_outputs({"--a": tmp_path / "x.json", "--b": None, "--c": tmp_path / "y.json"})
+        checks.separate_files({}, {"--a": tmp_path})
+    checks.separate_files({}, {"--a": tmp_path / "x.json", "--b": None, "--c": tmp_path / "y.json"})
+
+
+def test_no_output_is_an_input_by_any_name(tmp_path):
+    """Issue 23: the same file by its own name, through a symlink, a hard link or ``..``."""
+    scene = tmp_path / "scene.blend"
+    scene.write_bytes(b"BLENDER")
+    (tmp_path / "link.json").symlink_to(scene)
+    os.link(scene, tmp_path / "hard.json")
+    (tmp_path / "sub").mkdir()
+    for output in (scene, tmp_path / "link.json", tmp_path / "hard.json", tmp_path / "sub" / ".." / "scene.blend"):
+        with pytest.raises(InputError, match=r"--stats and SCENE.blend name the same file: .*never replaces an input"):
+            checks.separate_files({"SCENE.blend": scene}, {"--out": tmp_path / "o.exr", "--stats": output})
+    checks.separate_files({"SCENE.blend": scene, "REF": scene}, {"--out": tmp_path / "o.exr"})   # read twice: fine
+
+
+def test_inputs_that_are_not_regular_files_are_refused_without_opening_them(tmp_path):
+    fifo = tmp_path / "f.exr"
+    os.mkfifo(fifo)
+    for check in (lambda: checks.readable_file(fifo), lambda: checks.separate_files({"--map": fifo}, {})):
+        with pytest.raises(InputError, match="is a FIFO"):
+            check()                     # an open() would block here for ever
+    with pytest.raises(InputError, match="is a character device, not a regular file"):
+        checks.readable_file("/dev/null")
+    with pytest.raises(InputError, match="is a FIFO"):
+        checks.readable_folder(fifo)
+
+
+def test_names_past_the_systems_limits_are_refused(tmp_path):
+    long = "a" * 300
+    with pytest.raises(InputError, match="file name too long: a+\\.\\.\\.a+ \\(300 bytes; at most 255"):
+        checks.readable_file(tmp_path / long)
+    with pytest.raises(InputError, match="file name too long"):
+        checks.writable_folder(tmp_path / long)
+    with pytest.raises(InputError, match="path too long"):
+        checks.writable_file(tmp_path.joinpath(*["b" * 200] * 25, "o.exr"))
+    # A name that fits, whose temporary name (written first) does not.
+    with pytest.raises(InputError, match="written first under a temporary name"):
+        checks.writable_file(tmp_path / ("c" * 250 + ".exr"))
+    # A derived output over the limit: the one check names it.
+    extra = len(temporaries.temporary_name(tmp_path / "d.exr").name) - len("d.exr")   # pid's digits
+    fits = tmp_path / ("d" * (255 - extra - 2 - len(".exr")) + ".exr")                 # _spp: 4 more
+    checks.writable_file(fits)
+    with pytest.raises(InputError, match="its samples: file name too long"):
+        checks.separate_files({}, render_output_paths(fits))
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
 def test_places_to_write_are_probed_without_leaving_anything(tmp_path):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.maps.camera_rays import CameraRays, load_rays, save_rays
+from ...core.maps.camera_rays import CACHE_NAME, CameraRays, load_rays, save_rays
 from ...core.maps.guided_upsample import upsample_optical_depth
 from ...core.maps.transmittance import DEFAULT_SAMPLES, DEFAULT_TOLERANCE
 from ...core.maps.xmap import XMapWarning, luminance, x_map_from_cached_rays
@@ -24,7 +24,6 @@ from ..scene.geometry import geometry_digest, scan_scene
 from ..scene.probe import camera_model
 from .zbuffer import cast_camera_rays
 
-CACHE_NAME = "zcache.npz"
 #: Cycles fallback for media numpy cannot evaluate: fraction of the resolution, samples and
 #: volume step rate. An absorption-only render that ray-marches is nearly noise-free, so
 #: few samples do; a finer step than Cycles' own matters for mesh volumes (whose default

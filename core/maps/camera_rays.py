@@ -20,6 +20,8 @@ from ..files import atomic_path
 #: What z.exr holds where no surface is hit: Cycles' own Depth-pass value for "nothing".
 SKY_DEPTH = 1e10
 _CACHE_VERSION = 2
+#: The ray cache's name in a maps folder (``addon.maps.xmap``).
+CACHE_NAME = "zcache.npz"
 
 
 @dataclass

@@ -39,23 +39,32 @@ class MapSet:
         return getattr(self, name)
 
 
-def write_map_set(folder: str | Path, maps: MapSet) -> list[Path]:
-    """Write every map, maps.json and the PNG previews, all together or none
-    (``core.files.output_set``); returns the paths written. The names are the same every
-    time, so a new set replaces an earlier one in the folder whole."""
+def map_set_paths(folder: str | Path) -> dict[str, Path]:
+    """The files :func:`write_map_set` writes into ``folder``, by name ("x.exr",
+    "preview/x.png", "maps.json"): what a command's check compares with its inputs."""
     folder = Path(folder)
+    names = ["z.exr", "snapshot.exr"] + [f"{name}.exr" for name in MAP_NAMES]
+    names += [f"preview/{name}.png" for name in MAP_NAMES + ("snapshot", "z")] + ["maps.json"]
+    return {name: folder / name for name in names}
+
+
+def write_map_set(folder: str | Path, maps: MapSet) -> list[Path]:
+    """Write every map, maps.json and the PNG previews (:func:`map_set_paths`), all together
+    or none (``core.files.output_set``); returns the paths written. The names are the same
+    every time, so a new set replaces an earlier one in the folder whole."""
+    paths = map_set_paths(folder)
     with output_set():
         written = [
-            write_exr(folder / "z.exr", depth_to_exr(maps.z), ["Z"],
+            write_exr(paths["z.exr"], depth_to_exr(maps.z), ["Z"],
                       attributes={"xsl:z": "distance along the camera ray", "xsl:sky": SKY_DEPTH}),
-            write_exr(folder / "snapshot.exr", maps.snapshot),
+            write_exr(paths["snapshot.exr"], maps.snapshot),
         ]
         for name in MAP_NAMES:
-            written.append(write_exr(folder / f"{name}.exr", maps.director(name), ["Y"]))
-            written.append(write_png(folder / "preview" / f"{name}.png", maps.director(name)))
-        written.append(write_png(folder / "preview" / "snapshot.png", _display(maps.snapshot)))
-        written.append(write_png(folder / "preview" / "z.png", _depth_preview(maps.z)))
-        written.append(write_json(folder / "maps.json", maps.info))
+            written.append(write_exr(paths[f"{name}.exr"], maps.director(name), ["Y"]))
+            written.append(write_png(paths[f"preview/{name}.png"], maps.director(name)))
+        written.append(write_png(paths["preview/snapshot.png"], _display(maps.snapshot)))
+        written.append(write_png(paths["preview/z.png"], _depth_preview(maps.z)))
+        written.append(write_json(paths["maps.json"], maps.info))
     return written
 
 

@@ -26,9 +26,10 @@ from ...core import checks
 from ...core.errors import InputError
 
 
-def _converter(function, label: str, keep_text: bool = False):
+def _converter(function, label: str, keep_text: bool = False, role: str | None = None):
     """An argparse type: ``function(text)`` (or, ``keep_text``, the text once ``function``
-    accepted it), its InputError as argparse's one-line error."""
+    accepted it), its InputError as argparse's one-line error. ``role``: "input" or
+    "output" for a file the command reads or writes (:func:`declared_files`)."""
     def convert(text: str):
         try:
             value = function(text)
@@ -36,6 +37,7 @@ def _converter(function, label: str, keep_text: bool = False):
             raise argparse.ArgumentTypeError(str(error)) from None
         return text if keep_text else value
     convert.__name__ = label                # argparse names the type in some messages
+    convert.role = role
     return convert
 
 
@@ -79,7 +81,7 @@ def input_file(*suffixes: str, what: str = "file"):
     """An existing file we may read (with one of ``suffixes``, when given); ``what`` names it
     in messages ("no such director map: m.exr")."""
     return _converter(lambda text: checks.readable_file(text, suffixes, what=what), "file",
-                      keep_text=True)
+                      keep_text=True, role="input")
 
 
 def input_folder(what: str = "folder"):
@@ -90,7 +92,8 @@ def input_folder(what: str = "folder"):
 
 def output_file(*suffixes: str):
     """A file of one of ``suffixes`` that may be written (its folder is made if need be)."""
-    return _converter(lambda text: checks.writable_file(text, suffixes), "file", keep_text=True)
+    return _converter(lambda text: checks.writable_file(text, suffixes), "file", keep_text=True,
+                      role="output")
 
 
 def output_folder():
@@ -106,7 +109,7 @@ def _scene(text: str) -> None:
 
 
 #: A .blend file we may read (never written).
-SCENE = _converter(_scene, "SCENE.blend", keep_text=True)
+SCENE = _converter(_scene, "SCENE.blend", keep_text=True, role="input")
 
 
 def register_safe_numbers(parser: argparse.ArgumentParser) -> None:
@@ -121,3 +124,34 @@ from ...core.frames import frame_expression as _frame_expression  # noqa: E402
 
 #: Frames: 12, 1-250, 1-250:2 or a list such as 1-3,8; comes back in canonical form.
 FRAMES = _converter(_frame_expression, "FRAMES")
+
+
+def file_options(parser: argparse.ArgumentParser) -> list[tuple[str, str, str]]:
+    """(dest, label, role) of every option of ``parser`` that names a file it reads
+    (``input_file``, ``SCENE``) or writes (``output_file``); the label is how the user
+    knows it: the option ("--stats") or the positional's metavar ("SCENE.blend")."""
+    found = []
+    for action in parser._actions:
+        role = getattr(action.type, "role", None)
+        if role is not None:
+            label = action.option_strings[-1] if action.option_strings else (action.metavar or action.dest)
+            found.append((action.dest, label, role))
+    return found
+
+
+def declared_files(args) -> tuple[dict, dict]:
+    """(inputs, outputs) of a parsed command line, label -> path: the options of
+    :func:`file_options` (``args.file_options``) and what the command's optional
+    ``files(args)`` adds, the files its options imply (a render's ``_spp.exr``, the maps of
+    ``maps --out DIR``), named by the same functions that write them."""
+    inputs, outputs = {}, {}
+    for dest, label, role in getattr(args, "file_options", ()):
+        value = getattr(args, dest, None)
+        if value is not None:
+            (inputs if role == "input" else outputs)[label] = value
+    files = getattr(args.command, "files", None)
+    if files is not None:
+        more_inputs, more_outputs = files(args)
+        inputs.update(more_inputs)
+        outputs.update(more_outputs)
+    return inputs, outputs

@@ -41,12 +41,17 @@ def add_arguments(parser) -> None:
                         help="skip ColorVideoVDP (the slow metric; it is optional anyway)")
 
 
-def check(args) -> None:
-    from ...core.checks import distinct_outputs
+def heatmap_path(folder: str | Path, metric: str) -> Path:
+    """Where --heatmap-dir DIR keeps a metric's map: DIR/<metric>.png."""
+    return Path(folder) / f"{metric}.png"
 
-    folder = {f"--heatmap-dir's {name}.png": Path(args.heatmap_dir) / f"{name}.png"
-              for name in HEATMAP_NAMES} if args.heatmap_dir else {}
-    distinct_outputs({"--json": args.json, "--heatmap": args.heatmap, **folder})
+
+def files(args) -> tuple[dict, dict]:
+    """The maps of --heatmap-dir, each an output of its own."""
+    if not args.heatmap_dir:
+        return {}, {}
+    return {}, {f"--heatmap-dir's {name}.png": heatmap_path(args.heatmap_dir, name)
+                for name in HEATMAP_NAMES}
 
 
 def run(args) -> int:
@@ -65,7 +70,7 @@ def run(args) -> int:
     if args.heatmap_dir:
         for name, result in results.items():
             if result.per_pixel is not None:
-                written.append(write_heatmap(Path(args.heatmap_dir) / f"{name}.png",
+                written.append(write_heatmap(heatmap_path(args.heatmap_dir, name),
                                              result.per_pixel, result.heatmap_full_scale))
     if args.json:
         write_json(args.json, {

@@ -23,6 +23,16 @@ def add_arguments(parser) -> None:
     add_map_arguments(parser)
 
 
+def files(args) -> tuple[dict, dict]:
+    """What ``maps`` writes into --out DIR: the map set and the ray cache."""
+    from ...core.maps.camera_rays import CACHE_NAME
+    from ...core.maps.files import map_set_paths
+
+    outputs = {f"--out's {name}": path for name, path in map_set_paths(args.out).items()}
+    outputs["--out's ray cache"] = Path(args.out) / CACHE_NAME
+    return {}, outputs
+
+
 def run(args) -> int:
     # Check every option before Blender is even loaded.
     options = map_options_from_args(args)

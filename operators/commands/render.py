@@ -14,11 +14,12 @@ import sys
 import time
 from pathlib import Path
 
-from ...core.checks import MAX_SAMPLES, distinct_outputs, finite_number
+from ...core.checks import MAX_SAMPLES, finite_number, separate_files
 from ...core.errors import InputError
 from ...core.frames import frame_path, has_frame_marker, parse_frame_list
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
 from . import argtypes
+from .argtypes import declared_files
 from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
                      guided_options_from_args, map_options_from_args, render_options_from_args,
                      warnings_as_lines)
@@ -73,11 +74,40 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
+    """The files the render reads beyond its options (the map of --maps DIR) and writes: the
+    image with its ``_spp`` files (every frame's, for --frames), --stats, the maps of
+    --save-maps. ``out``: the image's name once a ``#`` in it became the frame number."""
+    from ...core.maps.camera_rays import CACHE_NAME
+    from ...core.maps.files import map_set_paths
+    from .render_animation import maps_folder
+
+    inputs = {"--maps' map": _map_file(args)} if args.maps else {}
+    frames = _frames(args)
+    outputs = {}
+    if frames is None:
+        outputs.update(render_output_paths(out or args.out, args.stats))
+        if args.save_maps:
+            outputs.update({f"--save-maps' {name}": path for name, path in map_set_paths(args.save_maps).items()})
+        return inputs, outputs
+    for frame in frames:
+        path = frame_path(str(args.out), frame)
+        for label, file in render_output_paths(path).items():
+            outputs[label.replace("its ", f"frame {frame}'s ") if label != "--out" else f"frame {frame}"] = file
+        if args.save_maps:
+            folder = maps_folder(args.save_maps, frame)
+            outputs.update({f"--save-maps' {folder.name}/{name}": path
+                            for name, path in map_set_paths(folder).items()})
+    if args.save_maps:
+        outputs["--save-maps' ray cache"] = Path(args.save_maps) / CACHE_NAME
+    outputs["--stats"] = args.stats
+    return inputs, outputs
+
+
 def check(args) -> None:
-    """What relates several options (``cli.py`` runs this before anything else): the files the
-    render writes are distinct files, uniform's --spp stays under the ceiling, guided has its
-    --time-budget (and only guided), every other mode its --max-spp."""
-    distinct_outputs(render_output_paths(args.out, args.stats))
+    """What relates several options (``cli.py`` runs this before anything else): uniform's
+    --spp stays under the ceiling, guided has its --time-budget (and only guided), every
+    other mode its --max-spp."""
     if args.mode == "guided":
         guided_options_from_args(args)
     elif args.time_budget is not None:
@@ -134,7 +164,7 @@ def _budget(args) -> dict:
         if args.map:
             return {"map": Path(args.map)}
         if args.maps:
-            return {"map": Path(args.maps) / f"{args.mode}.exr"}
+            return {"map": _map_file(args)}
         return {"compute_maps": map_options_from_args(args)}
     if args.mode == "uniform":
         if args.equal_time is not None:
@@ -158,6 +188,11 @@ def _budget(args) -> dict:
             return {"seconds": _render_budget(stats, args.budget_from), "from": args.budget_from}
         raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
     return {}
+
+
+def _map_file(args) -> Path:
+    """The map a selective render reads from --maps DIR: DIR/xs.exr or DIR/xsl.exr."""
+    return Path(args.maps) / f"{args.mode if args.mode in ('xs', 'xsl') else 'xsl'}.exr"
 
 
 def _read_map(path: Path):
@@ -214,6 +249,8 @@ def run(args) -> int:
             scene.frame_set(args.frame)        # an opened copy is never written to its file
         if has_frame_marker(str(out)):
             out = Path(frame_path(str(out), scene.frame_current))
+            # The frame's number is known now: its files go through the check again.
+            separate_files(declared_files(args)[0], files(args, out)[1])
         try:
             with InterruptToCancel() as interrupt:
                 progress = interrupt.wrap(bar)

@@ -17,6 +17,11 @@ from ...core.frames import frame_expression, frame_path
 from ...core.sampling.render_files import write_render_outputs
 
 
+def maps_folder(save_maps: str | Path, frame: int) -> Path:
+    """Where --save-maps DIR keeps one frame's maps: DIR/NNNN."""
+    return Path(save_maps) / f"{frame:04d}"
+
+
 def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
     from ...addon.animation import frames_steps, guided_frame, selective_frame, single_render_frame
     from ...addon.maps.director_maps import MapWarning
@@ -47,7 +52,7 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
         write_render_outputs(path, result.outcome.image, result.outcome.samples, stats,
                              spp_scale(args, options, result.outcome), options.seed)
         if save_maps is not None and result.maps is not None:
-            write_map_set(save_maps / f"{result.frame:04d}", result.maps)
+            write_map_set(maps_folder(save_maps, result.frame), result.maps)
         print(f"frame {result.frame}: " + summary_line(args.mode, stats, path), flush=True)
         return stats
 

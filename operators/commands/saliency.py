@@ -23,12 +23,6 @@ def add_arguments(parser) -> None:
                         help="also write an 8-bit grey preview")
 
 
-def check(args) -> None:
-    from ...core.checks import distinct_outputs
-
-    distinct_outputs({"--out": args.out, "--png": args.png})
-
-
 def run(args) -> int:
     # Imported here: the other commands should not pay for scikit-image at start-up.
     import time

@@ -36,6 +36,17 @@ def add_arguments(parser) -> None:
                              "interval instead of the adaptive grid (slow; a reference)")
 
 
+def output_paths(folder: str | Path) -> dict[str, Path]:
+    """The files ``xmap`` writes into ``folder``, by name."""
+    from ...core.maps.camera_rays import CACHE_NAME
+
+    return {name: Path(folder) / name for name in ("z.exr", "x.exr", "xmap.json", CACHE_NAME)}
+
+
+def files(args) -> tuple[dict, dict]:
+    return {}, {f"--out's {name}": path for name, path in output_paths(args.out).items()}
+
+
 def check(args) -> None:
     if args.samples is not None and args.tolerance is not None:
         raise InputError("--samples and --tolerance exclude each other")
@@ -58,6 +69,7 @@ def run(args) -> int:
     tolerance = None if args.samples is not None else (args.tolerance or DEFAULT_TOLERANCE)
     scene = open_blend(args.scene, args.scene_name)
     out = Path(args.out)
+    paths = output_paths(out)
     # Inside Blender (the batch entry) this is the user's open scene: frame and size go back.
     with preserved_scene(scene), warnings.catch_warnings(record=True) as caught:
         if args.frame is not None:
@@ -69,14 +81,14 @@ def run(args) -> int:
         x, z, info = compute_x_map(scene, cache_dir=out, minbound=args.minbound,
                                    depsgraph=bpy.context.evaluated_depsgraph_get(), samples=samples,
                                    tolerance=tolerance)
-    write_exr(out / "z.exr", depth_to_exr(z), ["Z"],
+    write_exr(paths["z.exr"], depth_to_exr(z), ["Z"],
               attributes={"xsl:z": "distance along the camera ray", "xsl:sky": SKY_DEPTH})
-    write_exr(out / "x.exr", x, ["Y"])
+    write_exr(paths["x.exr"], x, ["Y"])
     info["file"] = str(args.scene)
-    write_json(out / "xmap.json", info)
+    write_json(paths["xmap.json"], info)
     for message in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, XMapWarning)):
         print(f"xsl-render: warning: {message}", file=sys.stderr)
     seconds = info["seconds"]
-    print(f"wrote {out / 'z.exr'} and {out / 'x.exr'} ({x.shape[1]}x{x.shape[0]}, "
+    print(f"wrote {paths['z.exr']} and {paths['x.exr']} ({x.shape[1]}x{x.shape[0]}, "
           f"{seconds['total']:.2f} s, rays {'from cache' if info['cache']['hit'] else 'cast'})")
     return 0
