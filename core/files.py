@@ -9,6 +9,14 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 from . import temporaries
+from .errors import InputError
+
+
+def write_error(path: str | os.PathLike, error: OSError) -> InputError:
+    """A failed write (disk full, no permission, a name too long) as one line naming the file
+    and the reason: the user's to fix, exit code 2, not a bug of ours."""
+    reason = (error.strerror or str(error)).lower()
+    return InputError(f"cannot write {path}: {reason}")
 
 
 class _OutputSet:
@@ -28,9 +36,12 @@ class _OutputSet:
         with temporaries.gate():
             for path in self.staged:
                 if path.is_dir():       # checked before any rename: the set stays whole
-                    raise IsADirectoryError(f"cannot write {path}: a folder has that name")
+                    raise InputError(f"cannot write {path}: a folder has that name")
             for path, tmp in self.staged.items():
-                os.replace(tmp, path)
+                try:
+                    os.replace(tmp, path)
+                except OSError as error:
+                    raise write_error(path, error) from None
                 temporaries.forget(tmp)
             if seal:
                 temporaries.seal()
@@ -74,19 +85,26 @@ def output_set(seal: bool = False, own: bool = False):
 def atomic_path(path: str | os.PathLike):
     """Yield a temporary path next to ``path`` (same extension); rename it into place on
     success (at the end of the enclosing :func:`output_set`, if any), delete it on failure or
-    cancel, so no half-written file ever has the real name."""
+    cancel, so no half-written file ever has the real name. An OSError while the file is
+    made, written or renamed (disk full, no permission) becomes an InputError naming ``path``
+    and the reason (:func:`write_error`)."""
     path = Path(path)
-    made = temporaries.make_folders(path.parent)
-    temporaries.sweep(path.parent)
-    tmp = temporaries.new_file(path)      # mode 0o666 under the umask, as open() makes it
+    try:
+        made = temporaries.make_folders(path.parent)
+        temporaries.sweep(path.parent)
+        tmp = temporaries.new_file(path)  # mode 0o666 under the umask, as open() makes it
+    except OSError as error:
+        raise write_error(path, error) from None
     try:
         yield tmp
-    except BaseException:
+    except BaseException as error:
         temporaries.discard(tmp)
         if _open_sets:
             _open_sets[-1].made += made
         else:
             temporaries.remove_empty(made)
+        if isinstance(error, OSError):
+            raise write_error(path, error) from None
         raise
     if _open_sets:
         _open_sets[-1].made += made
@@ -96,9 +114,11 @@ def atomic_path(path: str | os.PathLike):
         with temporaries.gate():
             os.replace(tmp, path)
             temporaries.forget(tmp)
-    except BaseException:
+    except BaseException as error:
         temporaries.discard(tmp)
         temporaries.remove_empty(made)
+        if isinstance(error, OSError):
+            raise write_error(path, error) from None
         raise
 
 

@@ -144,17 +144,48 @@ def _write(path: str | os.PathLike, data: np.ndarray, spec: "oiio.ImageSpec", at
 
 
 def _write_to(path: Path, target: Path, data: np.ndarray, spec: "oiio.ImageSpec") -> None:
-    """Write ``data`` to ``target`` (``path`` or its temporary; errors name ``path``)."""
+    """Write ``data`` to ``target`` (``path`` or its temporary; errors name ``path``).
+
+    OpenImageIO does not always say when a write fails: a PNG's short writes only leave a
+    message behind, and an OpenEXR file small enough to sit in a buffer until ``close``
+    loses a full disk's error there. So every message counts as a failure, and the file
+    is read back whole before it may take the real name."""
     out = oiio.ImageOutput.create(str(target))
     if out is None:
         raise InputError(f"cannot write {path}: {oiio.geterror().strip() or 'unknown format'}")
     try:
         if not out.open(str(target), spec):
-            raise InputError(f"cannot write {path}: {out.geterror().strip()}")
-        if not out.write_image(data):
-            raise InputError(f"cannot write {path}: {out.geterror().strip()}")
+            raise InputError(f"cannot write {path}: {_first_line(out.geterror())}")
+        if not out.write_image(data) or out.has_error:
+            raise InputError(f"cannot write {path}: {_first_line(out.geterror())}")
     finally:
-        out.close()
+        closed = out.close()
+    if not closed or out.has_error:
+        raise InputError(f"cannot write {path}: {_first_line(out.geterror())}")
+    _read_back(path, target, spec)
+
+
+def _first_line(message: str) -> str:
+    lines = message.strip().splitlines()
+    return lines[0] if lines else "write failed"
+
+
+def _read_back(path: Path, target: Path, spec: "oiio.ImageSpec") -> None:
+    """InputError unless ``target`` reads back whole as the image of ``spec``."""
+    image = oiio.ImageInput.open(str(target))
+    problem = None
+    if image is None:
+        problem = _first_line(oiio.geterror())
+    else:
+        try:
+            pixels = image.read_image(0, 0, 0, spec.nchannels, spec.format)
+            if pixels is None or image.has_error:
+                problem = _first_line(image.geterror())
+        finally:
+            image.close()
+    if problem is not None:
+        # OpenImageIO's words name the temporary file; the user knows the real one.
+        raise InputError(f"cannot write {path}: the file came out incomplete (is the disk full?)")
 
 
 def linear_to_srgb(linear: np.ndarray) -> np.ndarray:

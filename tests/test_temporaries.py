@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from xsl_render.core import files, temporaries
-from xsl_render.core.errors import Cancelled
+from xsl_render.core.errors import Cancelled, InputError
 from xsl_render.core.files import atomic_path, output_set, write_json, write_text
 from xsl_render.core.maps.files import MapSet, write_map_set
 
@@ -80,7 +80,7 @@ def test_a_map_set_interrupted_while_written_leaves_the_earlier_set_whole(tmp_pa
         return original(path)
 
     monkeypatch.setattr(files.temporaries, "new_file", full_disk)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match=r"cannot write .*xsl\.exr: no space left on device"):
         write_map_set(tmp_path, _maps(0.75))
     assert tree(tmp_path) == earlier
 
