@@ -27,6 +27,7 @@ import numpy as np
 
 from ...core.camera import CameraModel
 from ...core.media.grid_nodes import grid_names
+from ...core.media.ray_marching import procedural_step, voxel_step
 from ...core.media.shader_graph import ShaderGraph, uses_default_coordinates
 from ...core.media.volume_medium import VolumeMedium, check_densities, volume_density_scale
 from .probe import renderable_instances
@@ -142,7 +143,8 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
         graph = graph_of(world.node_tree, f"world:{world.name}")
         if not graph.empty:
             media.append(VolumeMedium(key=f"world:{world.name}", name=world.name, kind="world",
-                                      material=None, graph=graph))
+                                      material=None, graph=graph,
+                                      extra={"cycles_step": _world_step(world)}))
     surfaces: list[Triangles] = []
     surface_medium: list[np.ndarray] = []
     volumes: dict[str, Triangles] = {}
@@ -211,9 +213,12 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             texspace = None
             if data is not None and hasattr(data, "texspace_location"):
                 texspace = (tuple(data.texspace_location), tuple(data.texspace_size))
+            world_vertices = vertices @ m[:3, :3].T + m[:3, 3]
+            step = procedural_step(world_vertices.min(axis=0), world_vertices.max(axis=0))
             medium = VolumeMedium(key=key, name=ob.name, kind="mesh", material=material.name,
                                   graph=graph_of(material.node_tree, f"mat:{material.name}"),
-                                  world_to_object=np.linalg.inv(m), texspace=texspace)
+                                  world_to_object=np.linalg.inv(m), texspace=texspace,
+                                  extra={"cycles_step": step * _material_step_rate(material)})
             if len(volume_slots) > 1:
                 medium.unsupported = "an object with several volume materials"
             elif _reads_attributes(medium.graph):
@@ -272,6 +277,39 @@ def _attach_grids(medium: VolumeMedium, scene, ob, depsgraph, object_to_world,
         medium.unsupported = f"volume object reads grids it does not have ({', '.join(missing)})"
         return
     medium.grids, medium.region = grids, region
+    medium.extra["cycles_step"] = _volume_object_step(ob, region) * _material_step_rate(
+        _slot_material(ob, medium))
+
+
+def _slot_material(ob, medium: VolumeMedium):
+    return next((slot.material for slot in ob.material_slots
+                 if slot.material is not None and slot.material.name == medium.material), None)
+
+
+def _material_step_rate(material) -> float:
+    settings = getattr(material, "cycles", None)
+    return float(getattr(settings, "volume_step_rate", 1.0))
+
+
+def _world_step(world) -> float:
+    """The world volume's Cycles step (its own size, no material rate)."""
+    settings = getattr(world, "cycles", None)
+    return float(getattr(settings, "volume_step_size", 1.0))
+
+
+def _volume_object_step(ob, region) -> float:
+    """Cycles' step of an OpenVDB volume object: the volume's own render step size when set
+    (in object or world space), else its voxel size in world space."""
+    if region is None:
+        return float("inf")
+    render = ob.data.render
+    size = float(getattr(render, "step_size", 0.0))
+    object_to_world = np.asarray(region.object_to_world, np.float64)
+    if size > 0.0:
+        if render.space == "OBJECT":
+            return float(np.min(np.abs(object_to_world[:3, :3] @ np.full(3, size))))
+        return size
+    return voxel_step(object_to_world @ np.asarray(region.index_to_object, np.float64))
 
 
 def geometry_digest(camera: CameraModel, geometry: SceneGeometry) -> str:
