@@ -102,8 +102,10 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     """``render_guided`` as steps (``core.progress``); closing it restores the scene."""
     guided.check()
     budget = guided.time_budget
-    clock = _Clock(already=map_seconds)
-    phases: dict[str, float] = {"maps": map_seconds}
+    # Auto's estimator prediction ran before, inside the budget like the importance map.
+    chosen_s = options.volume_estimator().seconds
+    clock = _Clock(already=map_seconds + chosen_s)
+    phases: dict[str, float] = {"maps": map_seconds, "estimator": chosen_s}
     with preserved_scene(scene):
         width, height, warnings = prepare_render(scene, options)
         if importance is not None:

@@ -60,6 +60,7 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
         scene.render.resolution_x, scene.render.resolution_y = options.resolution
         scene.render.resolution_percentage = 100
     camera_model(scene)                     # InputError for a missing or non-camera camera
+    apply_estimator(scene, options.volume_estimator())
     warnings = []
     if scene.render.engine != "CYCLES":
         warnings.append(f"scene '{scene.name}' renders with {scene.render.engine}; this run "
@@ -68,9 +69,21 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     return width, height, warnings
 
 
+def apply_estimator(scene, choice) -> None:
+    """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``)."""
+    if choice.biased is None:
+        return
+    scene.cycles.volume_biased = bool(choice.biased)
+    if choice.biased and choice.step_rate is not None:
+        scene.cycles.volume_step_rate = float(choice.step_rate)
+
+
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
            samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str]) -> dict:
     total = float(samples.sum(dtype=np.float64))
+    estimator = options.volume_estimator()
+    # Auto's prediction is part of the run (a phase, counted in its time).
+    phases.setdefault("estimator", estimator.seconds)
     return {
         "mode": mode,
         "scene": scene.name,
@@ -85,6 +98,7 @@ def render_stats(mode: str, scene, options: RenderOptions, width: int, height: i
         "renders": len(tiles),
         "tiles": tiles,
         "options": options.to_dict(),
+        "estimator": estimator.to_dict() | {"described": estimator.describe()},
         "warnings": warnings,
     }
 

@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass
 
 from ..checks import MAX_SAMPLES, MAX_SEED, frame_size, parse_frame_size, whole_number
 from ..errors import InputError
+from .volume_estimator import EstimatorChoice, check_estimator, fixed_choice
 
 #: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
 #: reset, image write) outweighs the samples saved.
@@ -62,6 +63,12 @@ class RenderOptions:
         Denoise the finished frame with Open Image Denoise (Cycles' own denoiser), guided by
         albedo and normal passes, the same way in every mode; tiles are never denoised one
         by one (that would seam). ``addon.cycles.denoise`` says why this is on by default.
+    estimator, step_rate
+        How Cycles estimates the volumes (``core.sampling.volume_estimator``): scene,
+        unbiased, biased (at ``step_rate``, default the scene's) or auto.
+    estimator_choice
+        What auto chose for this scene and frame (``addon.maps.estimator_choice``); a render
+        with auto and no choice is refused.
     """
 
     max_spp: int
@@ -75,6 +82,9 @@ class RenderOptions:
     adaptive_threshold: float | None = None
     resolution: tuple[int, int] | None = None
     denoise: bool = True
+    estimator: str = "scene"
+    step_rate: float | None = None
+    estimator_choice: EstimatorChoice | None = None
 
     def check(self) -> "RenderOptions":
         """Raise InputError naming the first impossible option; return self."""
@@ -97,7 +107,17 @@ class RenderOptions:
             raise InputError(f"--adaptive-threshold must be positive (got {self.adaptive_threshold})")
         if self.resolution is not None:
             frame_size(*self.resolution)
+        check_estimator(self.estimator, self.step_rate, "--estimator", "--step-rate")
         return self
+
+    def volume_estimator(self) -> EstimatorChoice:
+        """What the renders use for volumes: auto's choice, or the fixed one asked for."""
+        if self.estimator_choice is not None:
+            return self.estimator_choice
+        if self.estimator == "auto":
+            raise ValueError("--estimator auto must be chosen for the scene before rendering "
+                             "(addon.maps.estimator_choice)")
+        return fixed_choice(self.estimator, self.step_rate)
 
     def noise_threshold(self, spp: int) -> float | None:
         """Cycles' noise threshold for a rectangle of ``spp`` samples (None without
@@ -115,6 +135,8 @@ class RenderOptions:
     def to_dict(self) -> dict:
         data = asdict(self)
         data["resolution"] = list(self.resolution) if self.resolution else None
+        data["estimator_choice"] = (None if self.estimator_choice is None
+                                    else self.estimator_choice.to_dict())
         return data
 
 

@@ -92,6 +92,22 @@ def add_tile_arguments(parser) -> None:
                              "and normal, the same in every mode (default on)")
 
 
+def add_estimator_arguments(parser) -> None:
+    """How Cycles estimates the volumes (``core.sampling.volume_estimator``)."""
+    from ...core.sampling.volume_estimator import ESTIMATORS, MAX_STEP_RATE, MIN_STEP_RATE
+
+    group = parser.add_argument_group("volume estimator")
+    group.add_argument("--estimator", choices=ESTIMATORS, default="scene",
+                       help="scene: the scene's own volume settings (default); unbiased: null "
+                            "scattering; biased: ray marching; auto: ray marching at the largest "
+                            "step rate whose predicted bias hides in the run's noise, else null "
+                            "scattering")
+    group.add_argument("--step-rate", type=argtypes.number(MIN_STEP_RATE, MAX_STEP_RATE), default=None,
+                       metavar="RATE",
+                       help="biased: Cycles' volume step rate (default: the scene's); auto: the "
+                            "largest rate it may choose")
+
+
 def add_guided_arguments(parser, budget_required: bool = False) -> None:
     """The options of ``--mode guided`` (``core.sampling.guided_plan.GuidedOptions``);
     ``budget_required`` where there is no other mode."""
@@ -155,7 +171,8 @@ def render_options_from_args(args):
         max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=parse_resolution(args.resolution), denoise=args.denoise).check()
+        resolution=parse_resolution(args.resolution), denoise=args.denoise,
+        estimator=getattr(args, "estimator", "scene"), step_rate=getattr(args, "step_rate", None)).check()
 
 
 def map_options_from_args(args) -> MapOptions:

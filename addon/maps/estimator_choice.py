@@ -1,0 +1,95 @@
+"""``--estimator auto`` for a scene: predict ray marching's bias from the media and choose.
+
+The camera rays are cast at a reduced size (about ``PREDICTION_PIXELS`` rays over the
+frame) and the media scanned as the X map scans them; ``core.media.ray_marching`` marches
+them as Cycles would at each candidate step rate and ``core.sampling.volume_estimator``
+picks the rate. Media numpy cannot evaluate (only Cycles can) cannot be predicted: then
+null scattering. The seconds it takes are the run's (a phase of its statistics).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+from ...core.maps.transmittance import medium_segments
+from ...core.media.ray_marching import MarchingPredictor, sample_pixels
+from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
+                                               fixed_choice, visible_bias)
+from ..scene.geometry import scan_scene
+from ..scene.probe import camera_model, render_size
+from .zbuffer import cast_camera_rays
+
+#: Camera rays the prediction marches (its 95th percentile needs a few hundred at least).
+PREDICTION_PIXELS = 1200
+
+
+def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoice:
+    """The volume estimator a run of ``spp`` samples per pixel renders with.
+
+    ``options.estimator`` other than auto is taken as given; auto predicts (module notes),
+    never trying a step rate above ``options.step_rate`` when one is given.
+    """
+    if options.estimator != "auto":
+        return fixed_choice(options.estimator, options.step_rate)
+    import bpy
+
+    started = time.perf_counter()
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    geometry, media = scan_scene(scene, depsgraph)
+    opaque = [m.name for m in media if not m.evaluable]
+    if opaque:
+        return replace(EstimatorChoice("auto", biased=False,
+                                       reason=f"medium '{opaque[0]}' is evaluated only by Cycles, "
+                                              "so its bias cannot be predicted"),
+                       seconds=time.perf_counter() - started)
+    if not media:
+        return replace(fixed_choice("scene", None), estimator="auto", reason="no participating media",
+                       seconds=time.perf_counter() - started)
+    width, height = options.resolution or render_size(scene)
+    scale = min(1.0, math.sqrt(PREDICTION_PIXELS / (width * height)))
+    camera = camera_model(scene, size=(max(4, round(width * scale)), max(4, round(height * scale))))
+    rays = cast_camera_rays(camera, geometry)
+    segments = [medium_segments(rays, m) for m in media]
+    pixels = sample_pixels(rays.shape, PREDICTION_PIXELS)
+    predictor = MarchingPredictor(rays, media, segments, pixels, finest_rate=min(CANDIDATE_RATES))
+    if not predictor.heterogeneous:
+        choice = EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
+                                 reason="homogeneous media only: ray marching takes each in one "
+                                        "exact step")
+    else:
+        def measure(rate: float) -> float:
+            error = predictor.error(rate)
+            return visible_bias(error.luminance(error.transmittance), error.luminance(error.bias))
+
+        choice = choose_step_rate(measure, spp, largest=options.step_rate)
+    return replace(choice, seconds=time.perf_counter() - started)
+
+
+#: The samples per pixel ``auto`` assumes for a guided render without a ceiling: its sample
+#: count is only known after the pilot, which already renders with the estimator (changing
+#: it afterwards would sync the scene again). 16 is what the measured budgets gave.
+GUIDED_SPP = 16
+
+
+def estimator_spp(mode: str, options: RenderOptions, budget: dict | None = None) -> float:
+    """The samples per pixel a run of ``mode`` gives its pixels at most, which sets how much
+    bias ``auto`` tolerates: uniform's count when it has one, guided's ceiling (or
+    ``GUIDED_SPP``), the ceiling otherwise (xs and xsl give some pixels that many)."""
+    budget = budget or {}
+    if mode == "uniform" and budget.get("spp"):
+        return float(budget["spp"])
+    if mode == "guided":
+        guided = budget.get("guided")
+        ceiling = getattr(guided, "max_spp", None)
+        return float(ceiling) if ceiling else float(GUIDED_SPP)
+    return float(options.max_spp)
+
+
+def with_estimator_choice(scene, options: RenderOptions, spp: float) -> RenderOptions:
+    """``options`` with auto's choice for the scene at its current frame (unchanged for the
+    other estimators, or when chosen already)."""
+    if options.estimator != "auto" or options.estimator_choice is not None:
+        return options
+    return replace(options, estimator_choice=choose_estimator(scene, options, spp))
