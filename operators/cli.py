@@ -34,6 +34,7 @@ from ..core.errors import InputError
 from ..core.files import output_set
 from .commands.argtypes import declared_files, file_options, register_safe_numbers
 from .console import blender_chatter_to_log
+from .signals import EXIT_CODES
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -83,7 +84,6 @@ def _outputs_as_a_set(command, args) -> bool:
     return bool(getattr(command, "OUTPUTS_AS_A_SET", True))
 
 
-def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
 def check_files(args, in_blender: bool = False) -> None:
     """The command's files (``argtypes.declared_files``) through ``separate_files``; inside
     Blender the open .blend is an input too."""
@@ -96,6 +96,7 @@ def check_files(args, in_blender: bool = False) -> None:
     separate_files(inputs, outputs)
 
 
+def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
     """Run one command; ``watcher``: the command line's signal watcher (``signals.py``)."""
     argv = sys.argv[1:] if argv is None else argv
     try:
@@ -107,14 +108,15 @@ def check_files(args, in_blender: bool = False) -> None:
         return int(done.code or 0)
     command = args.command
     try:
-        if hasattr(command, "check"):
         check_files(args, in_blender)
+        if hasattr(command, "check"):
             command.check(args)
     except InputError as error:
         print(f"xsl-render: error: {error}", file=sys.stderr)
         return 2
-    if watcher is not None and getattr(command, "INTERRUPTIBLE", False):
-        watcher.interrupt_main = True
+    interruptible = watcher is not None and getattr(command, "INTERRUPTIBLE", False)
+    if interruptible:
+        watcher.interrupt_main_thread()
     outputs = output_set(seal=True) if _outputs_as_a_set(command, args) else nullcontext()
     with blender_chatter_to_log(keep=args.verbose) as log_path:
         try:
@@ -137,6 +139,8 @@ def check_files(args, in_blender: bool = False) -> None:
             print(f"xsl-render: internal error: {type(error).__name__}: {message} "
                   "(set XSL_DEBUG=1 for the traceback)", file=sys.stderr)
             code = 1
+        if interruptible and watcher.received is not None and code in (0, 130):
+            code = EXIT_CODES[watcher.received]     # stopped by a signal: 130 or 143 as ever
         if args.verbose:
             print(f"xsl-render: Blender's console output is in {log_path}", file=sys.stderr)
     return code

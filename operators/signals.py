@@ -15,8 +15,12 @@ for the one thread that asks for it with ``sigwait``, the :class:`Watcher`:
   thread is doing, in Python or in C;
 - once the command's outputs are in place (``temporaries.seal``) a signal comes too late
   and is ignored: the command ends as it would have;
-- a command that runs until stopped (``experiment-serve``) asks for ``interrupt_main``: the
-  signal becomes KeyboardInterrupt in its main thread, and it shuts down cleanly.
+- a command that runs until stopped (``experiment-serve``) asks for
+  :meth:`Watcher.interrupt_main_thread`: the signal becomes KeyboardInterrupt in its main
+  thread, it shuts down cleanly, and the command line ends with 130 or 143 all the same
+  (:attr:`Watcher.received`). Python's own SIGINT handler is put in place for that, whatever
+  the process inherited: a background job of a shell script starts with SIGINT ignored, and
+  ``_thread.interrupt_main`` does nothing then.
 
 The watcher needs the GIL to act: while Blender holds it (up to about half a second during
 ``import bpy``) the cancel waits, but it always comes, and nothing is written meanwhile.
@@ -39,6 +43,7 @@ class Watcher:
 
     def __init__(self):
         self.interrupt_main = False
+        self.received: int | None = None   # the signal that stopped an interruptible command
         self._stderr = os.dup(2)            # the terminal's, whatever fd 2 points at later
         self._thread = threading.Thread(target=self._run, name="xsl-render signals", daemon=True)
         self._thread.start()
@@ -47,9 +52,18 @@ class Watcher:
         while True:
             signum = signal.sigwait(SIGNALS)
             if self.interrupt_main:
+                self.received = signum
                 _thread.interrupt_main()
                 continue
             self.cancel(signum)
+
+    def interrupt_main_thread(self) -> None:
+        """From now on a signal raises KeyboardInterrupt in the main thread (call it there):
+        Python's SIGINT handler goes in, whatever was inherited, since ``interrupt_main``
+        acts only through it. The signals stay blocked in this thread: the handler runs
+        only for ``interrupt_main``."""
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        self.interrupt_main = True
 
     def cancel(self, signum: int) -> None:
         """Remove every temporary and end the process, unless the outputs are in place."""

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import signal
 import socket
 import subprocess
 import sys
@@ -205,3 +206,28 @@ def test_a_body_shorter_than_its_length_gets_400_after_the_timeout(tmp_path):
         srv.shutdown()
         srv.server_close()
         srv.store.close()
+
+
+@pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_a_server_started_with_sigint_ignored_still_stops(tmp_path, signum, code):
+    """Issue 23, point 3: a background job of a shell script starts with SIGINT ignored; the
+    server used to ignore SIGTERM and SIGINT then (``interrupt_main`` does nothing without
+    Python's handler) and, stopped, exited 0. It installs its own and exits 130/143."""
+    stimuli = make_stimuli(tmp_path / "stimuli", scenes=("alpha",), size=(4, 4))
+    exe = Path(sys.executable).with_name("xsl-render")
+    process = subprocess.Popen([str(exe), "experiment-serve", str(stimuli), "--port", "0"],
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        lines = []
+        while not any("http://" in line for line in lines):
+            lines.append(process.stdout.readline())
+            assert lines[-1], f"experiment-serve did not start: {process.stderr.read()}"
+        process.send_signal(signum)
+        out, err = process.communicate(timeout=20)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == code, err
+    assert "stopped; every answer given is in the database" in out and "Traceback" not in err

@@ -49,6 +49,19 @@ def add_arguments(parser) -> None:
                              "(the paper's first experiment); or one condition for everybody")
 
 
+def database_path(args) -> Path:
+    """--db, or by default STIMULI_DIR/experiment.sqlite."""
+    return Path(args.db) if args.db else Path(args.stimuli) / "experiment.sqlite"
+
+
+def files(args) -> tuple[dict, dict]:
+    """The stimuli read (every PNG of the folder) and the answers database written (--db is
+    an option's own)."""
+    stimuli = {f"stimulus {path.name}": path for path in sorted(Path(args.stimuli).iterdir())
+               if path.name.lower().endswith(".png")}
+    return stimuli, ({} if args.db else {"the answers database": database_path(args)})
+
+
 def check(args) -> None:
     from ...core.checks import writable_file
 
@@ -61,13 +74,14 @@ def run(args) -> int:
     from ..experiment_server import start_server
 
     pairs = scan_stimuli(args.stimuli)
-    db_path = Path(args.db) if args.db else Path(args.stimuli) / "experiment.sqlite"
+    db_path = database_path(args)
     server = start_server(pairs, db_path, args.host, args.port, CONDITION_CHOICES[args.condition])
-    server.say(f"{len(pairs)} scenes, condition {args.condition}; answers go to {db_path}")
-    server.say(f"open {server.url} in the participant's browser (Ctrl-C stops)")
     # A terminal's Ctrl-C and a service manager's SIGTERM both end the session cleanly: the
-    # command line's signal watcher raises KeyboardInterrupt here (INTERRUPTIBLE).
+    # command line's signal watcher raises KeyboardInterrupt here (INTERRUPTIBLE), from the
+    # moment the address is printed, and the command line then ends with 130 or 143.
     try:
+        server.say(f"{len(pairs)} scenes, condition {args.condition}; answers go to {db_path}")
+        server.say(f"open {server.url} in the participant's browser (Ctrl-C stops)")
         server.serve_forever()
     except KeyboardInterrupt:
         server.say("stopped; every answer given is in the database")
