@@ -24,6 +24,7 @@ from ..core.sampling.render_options import RenderOptions
 from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
 from .maps.director_maps import map_steps, named_map_steps
+from .maps.estimator_choice import with_estimator_choice
 from .scene.state import preserved_scene
 
 #: Share of a selective frame's progress bar given to its maps.
@@ -101,6 +102,20 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
         outcome = yield from scaled_steps(guided_steps(scene, options, guided, importance, map_seconds),
                                           start, 1.0)
         return FrameResult(scene.frame_current, outcome)
+
+    return steps
+
+
+def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: RenderOptions,
+                    spp: float) -> FrameJob:
+    """The frame job ``make_job(options)`` with ``--estimator auto`` chosen for each frame
+    (its media may move) before the frame's maps and renders, inside its time."""
+    if options.estimator != "auto" or options.estimator_choice is not None:
+        return make_job(options)
+
+    def steps(scene) -> Steps[FrameResult]:
+        chosen = with_estimator_choice(scene, options, spp)
+        return (yield from make_job(chosen)(scene))
 
     return steps
 

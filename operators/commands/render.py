@@ -20,7 +20,8 @@ from ...core.frames import frame_path, has_frame_marker, parse_frame_list
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
 from . import argtypes
 from .argtypes import declared_files
-from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
+from .common import (add_estimator_arguments, add_guided_arguments, add_map_arguments,
+                     add_scene_arguments, add_tile_arguments,
                      guided_options_from_args, map_options_from_args, render_options_from_args,
                      warnings_as_lines)
 from .render_common import render_baseline, spp_scale, summary_line
@@ -60,6 +61,7 @@ def add_arguments(parser) -> None:
                       help="also write the maps computed on the fly here")
     add_map_arguments(parser)
     add_tile_arguments(parser)
+    add_estimator_arguments(parser)
     budget = parser.add_argument_group("budget (uniform, adaptive)")
     budget.add_argument("--spp", type=argtypes.SAMPLES, help="uniform: samples per pixel")
     budget.add_argument("--budget-from", metavar="STATS.json", type=argtypes.input_file(what="stats file"),
@@ -232,6 +234,7 @@ def run(args) -> int:
     director_map = _read_map(budget["map"]) if "map" in budget else None
     map_seconds = time.perf_counter() - started
 
+    from ...addon.maps.estimator_choice import estimator_spp, with_estimator_choice
     from ...addon.scene.blend_session import open_blend
     from ...addon.scene.state import preserved_scene
     from ..interrupt import InterruptToCancel
@@ -254,6 +257,7 @@ def run(args) -> int:
         try:
             with InterruptToCancel() as interrupt:
                 progress = interrupt.wrap(bar)
+                options = with_estimator_choice(scene, options, estimator_spp(args.mode, options, budget))
                 if "compute_maps" in budget:
                     director_map, map_seconds = _compute_map(scene, args, budget["compute_maps"], options)
                 if args.mode in ("xs", "xsl"):

@@ -23,7 +23,9 @@ def maps_folder(save_maps: str | Path, frame: int) -> Path:
 
 
 def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
-    from ...addon.animation import frames_steps, guided_frame, selective_frame, single_render_frame
+    from ...addon.animation import (estimated_frame, frames_steps, guided_frame, selective_frame,
+                                    single_render_frame)
+    from ...addon.maps.estimator_choice import estimator_spp
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
     from ...core.maps.files import write_map_set
@@ -36,12 +38,15 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
 
     save_maps = Path(args.save_maps) if args.save_maps else None
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
-    if args.mode in ("xs", "xsl"):
-        job = selective_frame(budget["compute_maps"], options, args.mode, cache_dir)
-    elif args.mode == "guided":
-        job = guided_frame(budget["guided"], budget["map_options"], options, cache_dir)
-    else:
-        job = single_render_frame(lambda s: render_baseline(s, args, options, budget), args.mode)
+
+    def frame_job(frame_options):
+        if args.mode in ("xs", "xsl"):
+            return selective_frame(budget["compute_maps"], frame_options, args.mode, cache_dir)
+        if args.mode == "guided":
+            return guided_frame(budget["guided"], budget["map_options"], frame_options, cache_dir)
+        return single_render_frame(lambda s: render_baseline(s, args, frame_options, budget), args.mode)
+
+    job = estimated_frame(frame_job, options, estimator_spp(args.mode, options, budget))
 
     def on_frame(result) -> dict:
         path = Path(frame_path(str(out), result.frame))

@@ -1,0 +1,125 @@
+"""``--estimator`` end to end: what each choice sets in Cycles, what auto predicts and records,
+the scene's own volume settings back after success, cancel and error, bad values refused."""
+from __future__ import annotations
+
+import json
+
+import pytest
+from fog_scene import build_fog_scene
+from test_cli_info import one_line_error
+from test_ray_marching import _two_media_scene
+
+from xsl_render.addon.cycles import selective_render as sr
+from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+from xsl_render.addon.scene.state import settings_dump
+from xsl_render.core.errors import Cancelled
+from xsl_render.core.sampling.render_options import RenderOptions
+
+pytestmark = [pytest.mark.blender, pytest.mark.render]
+
+W, H = 48, 27
+
+
+def _volume_settings(scene) -> tuple:
+    return scene.cycles.volume_biased, scene.cycles.volume_step_rate
+
+
+@pytest.mark.parametrize("estimator, rate, biased, step", [
+    ("scene", None, False, 1.7),
+    ("unbiased", None, False, 1.7),
+    ("biased", None, True, 1.7),
+    ("biased", 3.0, True, 3.0),
+])
+def test_each_estimator_reaches_cycles_and_the_scene_gets_its_settings_back(
+        blender, monkeypatch, estimator, rate, biased, step):
+    scene = build_fog_scene(blender, W, H)
+    scene.cycles.volume_biased, scene.cycles.volume_step_rate = False, 1.7
+    before = settings_dump(scene)
+    seen = []
+    real_render = CyclesWindowRenderer.render
+
+    def spying(self, *args, **kwargs):
+        seen.append(_volume_settings(self.scene))
+        return real_render(self, *args, **kwargs)
+
+    monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
+    options = RenderOptions(max_spp=2, estimator=estimator, step_rate=rate).check()
+    outcome = sr.render_uniform(scene, options, spp=1)
+    assert seen and all(s == (biased, pytest.approx(step)) for s in seen)
+    assert outcome.stats["estimator"]["estimator"] == estimator
+    assert settings_dump(scene) == before
+
+    with pytest.raises(Cancelled):                                              # cancel
+        sr.render_uniform(scene, options, spp=1, progress=lambda fraction, message: True)
+    assert settings_dump(scene) == before
+
+    def failing(self, *args, **kwargs):
+        raise RuntimeError("render failed")
+
+    monkeypatch.setattr(CyclesWindowRenderer, "render", failing)                # error
+    with pytest.raises(RuntimeError, match="render failed"):
+        sr.render_uniform(scene, options, spp=1)
+    assert settings_dump(scene) == before
+
+
+def test_auto_marches_where_the_bias_hides_in_the_noise(blender):
+    """On a noise fog box over an OpenVDB smoke, few samples tolerate a coarse step; many
+    samples ask for a finer one (or for null scattering); a homogeneous fog is exact."""
+    from xsl_render.addon.maps.estimator_choice import choose_estimator
+
+    scene = _two_media_scene(blender)
+    before = settings_dump(scene)
+    options = RenderOptions(max_spp=4, estimator="auto").check()
+    few = choose_estimator(scene, options, spp=1)
+    many = choose_estimator(scene, options, spp=4096)
+    assert few.biased and few.step_rate is not None
+    assert few.predicted_bias <= few.tolerance
+    assert not many.biased or many.step_rate < few.step_rate
+    assert list(many.tried) == sorted(many.tried, reverse=True)
+    capped = choose_estimator(scene, RenderOptions(max_spp=4, estimator="auto", step_rate=0.5), spp=1)
+    assert max(capped.tried) <= 0.5
+    assert few.seconds > 0.0
+    assert settings_dump(scene) == before                   # predicting changes nothing
+
+    fog = build_fog_scene(blender, W, H)                     # homogeneous world fog
+    exact = choose_estimator(fog, options, spp=4096)
+    assert exact.biased and exact.predicted_bias == 0.0 and "homogeneous" in exact.reason
+
+
+def test_cli_records_the_choice(cli, blender, tmp_path):
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    path = tmp_path / "two.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(path))
+    stats_path = tmp_path / "out.json"
+    result = cli("render", path, "--mode", "uniform", "--spp", "2", "--max-spp", "4",
+                 "--estimator", "auto", "--out", tmp_path / "out.exr", "--stats", stats_path,
+                 "--quiet")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads(stats_path.read_text())
+    chosen = stats["estimator"]
+    assert chosen["estimator"] == "auto" and chosen["tried"]
+    assert stats["phases_s"]["estimator"] == pytest.approx(chosen["seconds"])
+    assert stats["wall_s"] >= chosen["seconds"]
+    frames = cli("render", path, "--mode", "uniform", "--spp", "1", "--max-spp", "4",
+                 "--estimator", "biased", "--step-rate", "2", "--frames", "1-2",
+                 "--out", tmp_path / "f_#.exr", "--stats", tmp_path / "f.json", "--quiet")
+    assert frames.returncode == 0, frames.stderr
+    done = json.loads((tmp_path / "f.json").read_text())["frames"]
+    assert [f["estimator"]["step_rate"] for f in done] == [2.0, 2.0]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--estimator", "scene", "--step-rate", "2"], "does not march"),
+    (["--estimator", "biased", "--step-rate", "0"], "--step-rate"),
+    (["--estimator", "biased", "--step-rate", "nan"], "--step-rate"),
+    (["--estimator", "fast"], "--estimator"),
+])
+def test_bad_estimator_options_exit_2_before_blender(cli, blender, tmp_path, extra, message):
+    build_fog_scene(blender, W, H)
+    blender.ops.wm.save_as_mainfile(filepath=str(tmp_path / "fog.blend"))
+    result = cli("render", tmp_path / "fog.blend", "--mode", "gold",
+                 "--max-spp", "4", "--out", tmp_path / "o.exr", *extra)
+    assert result.returncode == 2
+    assert message in one_line_error(result)
+    assert not (tmp_path / "o.exr").exists()
