@@ -16,6 +16,7 @@ import numpy as np
 import OpenImageIO as oiio
 
 from ...core.errors import InputError
+from .device import honour_scene_device
 
 #: Our pass name -> (view-layer flag enabling it, its name in the EXR, channels).
 PASSES = {
@@ -33,9 +34,12 @@ PASSES = {
 
 
 def ensure_cycles(scene) -> None:
+    """Cycles as the engine, on the scene's own device (``addon.cycles.device``: its GPUs
+    enabled, or the CPU when it asks for none or the machine has none). Both are scene
+    settings, so this runs inside ``preserved_scene`` and the user's scene gets them back."""
     if scene.render.engine != "CYCLES":
         scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
+    honour_scene_device(scene)
 
 
 def render_passes(scene, passes: tuple[str, ...] = ("Combined",), view_layer=None) -> dict[str, np.ndarray]:
