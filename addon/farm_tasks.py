@@ -7,6 +7,10 @@ task with nothing left to do returns at once. The pixels come from
 ``selective_render.render_rect`` and ``animation.guided_frame``, the same code
 ``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
+
+``device`` (the job's Device: CPU or GPU) is set on the opened copy of the scene, never
+written; None keeps the scene's own. ``progress`` gets (fraction, message) as the task goes
+(the farm-task command prints them as Open Job Description's progress and status lines).
 """
 from __future__ import annotations
 
@@ -26,6 +30,7 @@ from ..core.farm.task_groups import plan_group
 from ..core.files import json_digest
 from ..core.maps.files import write_map_set
 from ..core.maps.options import MapOptions
+from ..core.progress import ProgressCallback
 from ..core.sampling.guided_plan import GuidedOptions
 from ..core.sampling.render_files import frame_attributes, preview_scale
 from ..core.sampling.render_options import RenderOptions
@@ -46,8 +51,21 @@ class TaskOutcome:
     stats: dict | None = None       # a finished frame's statistics (the guided task)
 
 
+def _open(scene_path, scene_name: str, frame: int, device: str | None):
+    """The scene opened at ``frame`` on ``device`` (the opened copy only; never written)."""
+    from .cycles.device import use_device
+    from .scene.blend_session import open_blend
+
+    scene = open_blend(scene_path, scene_name)
+    scene.frame_set(frame)
+    if device is not None:
+        use_device(scene, device)
+    return scene
+
+
 def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
-                  mode: str, map_options: MapOptions, options: RenderOptions) -> TaskOutcome:
+                  mode: str, map_options: MapOptions, options: RenderOptions,
+                  device: str | None = None, progress: ProgressCallback | None = None) -> TaskOutcome:
     """Director maps and tile plan of ``frame`` unless a finished plan for the same inputs exists."""
     from .scene.blend_session import check_blend_file
 
@@ -59,10 +77,10 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: s
         return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started)
 
     from .maps.director_maps import compute_maps
-    from .scene.blend_session import open_blend
 
-    scene = open_blend(scene_path, scene_name)
-    maps = compute_maps(scene, map_options, size=options.resolution, frame=frame, cache_dir=files.maps)
+    scene = _open(scene_path, scene_name, frame, device)
+    maps = compute_maps(scene, map_options, size=options.resolution, frame=frame, cache_dir=files.maps,
+                        progress=progress)
     maps.info["file"] = str(scene_path)
     write_map_set(files.maps, maps)
     plan = make_plan(maps.director(mode), options)
@@ -72,7 +90,8 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: s
 
 
 def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group: int, groups: int,
-                   log: Log | None = None) -> TaskOutcome:
+                   log: Log | None = None, device: str | None = None,
+                   progress: ProgressCallback | None = None) -> TaskOutcome:
     """Render the rectangles of ``frame`` that task ``group`` of ``groups`` owns and that have
     no finished image yet; each is written (image, then record) as soon as it is rendered."""
     from .scene.blend_session import check_blend_file
@@ -103,11 +122,11 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
 
     from .cycles.selective_render import prepare_render, render_rect
     from .cycles.tile_render import CyclesWindowRenderer
-    from .scene.blend_session import open_blend
     from .scene.state import preserved_scene
 
-    scene = open_blend(scene_path, record.scene_name)
-    scene.frame_set(frame)                  # the opened copy only; the file is never written
+    report = progress or (lambda fraction, message: None)
+    report(len(outcome.reused) / len(mine), f"opening the scene, {len(todo)} rectangles to render")
+    scene = _open(scene_path, record.scene_name, frame, device)
     with preserved_scene(scene):
         width, height, outcome.warnings = prepare_render(scene, options)
         if (width, height) != (record.plan.width, record.plan.height):
@@ -125,12 +144,15 @@ def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group
                 name = files.rect_name(rect)
                 outcome.done_now.append(name)
                 log(f"rendered {name} at {rect.spp} spp in {piece.rendered.seconds:.2f} s")
+                done = len(outcome.reused) + len(outcome.done_now)
+                report(done / len(mine), f"rendered {done} of {len(mine)} rectangles")
     outcome.seconds = time.perf_counter() - started
     return outcome
 
 
 def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
-                    guided: GuidedOptions, map_options: MapOptions, options: RenderOptions) -> TaskOutcome:
+                    guided: GuidedOptions, map_options: MapOptions, options: RenderOptions,
+                    device: str | None = None, progress: ProgressCallback | None = None) -> TaskOutcome:
     """Render ``frame`` with the guided sampler within ``guided.time_budget`` (its importance
     map inside the budget) unless its files are finished for the same inputs; write the
     image, samples and statistics as one set (``core.farm.frame_outputs``). ``options``:
@@ -150,11 +172,9 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output:
 
     from ..core.progress import run_steps
     from .animation import guided_frame
-    from .scene.blend_session import open_blend
 
-    scene = open_blend(scene_path, scene_name)
-    scene.frame_set(frame)                  # the opened copy only; the file is never written
-    outcome = run_steps(guided_frame(guided, map_options, options)(scene)).outcome
+    scene = _open(scene_path, scene_name, frame, device)
+    outcome = run_steps(guided_frame(guided, map_options, options)(scene), progress).outcome
     stats = guided_frame_record(inputs, {**outcome.stats, "frame": frame, "file": str(scene_path),
                                          "out": str(files.image)})
     scale = preview_scale(guided.max_spp, outcome.samples)

@@ -39,10 +39,12 @@ def openjd(*args, env: dict | None = None, timeout: float = 300) -> subprocess.C
 
 def private_tmp(tmp_path: Path) -> dict:
     """An environment whose temporary folder is the test's own: a killed task's leftovers
-    (its Cycles scratch folder, the openjd session folder) go with the test's files."""
+    (its Cycles scratch folder, the openjd session folder) go with the test's files. Its PATH
+    finds xsl-render, as a prepared worker's does (the bundle names no executable)."""
     folder = tmp_path / "tmp"
     folder.mkdir(exist_ok=True)
-    return {**os.environ, "TMPDIR": str(folder)}
+    path = os.pathsep.join([str(OPENJD.parent), os.environ.get("PATH", "/usr/bin:/bin")])
+    return {**os.environ, "TMPDIR": str(folder), "PATH": path}
 
 
 def job_values(bundle: Path) -> str:

@@ -4,6 +4,8 @@
 
     DIR/template.yaml            the Open Job Description job template
     DIR/parameter_values.yaml    the values chosen at bundle time (``parameterValues`` list)
+    DIR/asset_references.yaml    the files the scene reads, attached to the job (core.farm.assets)
+    DIR/worker_requirements.txt  the pinned versions a worker installs (core.farm.worker_requirements)
     DIR/xsl_render_bundle.json   our marker: what wrote the folder, and when
     DIR/output/                  where the job writes (by default; the OutputDir parameter)
 
@@ -19,6 +21,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..files import output_set, write_json, write_text
+from .assets import FILE_NAME as ASSET_REFERENCES
+from .worker_requirements import FILE_NAME as WORKER_REQUIREMENTS
 
 MARKER = "xsl_render_bundle.json"
 TEMPLATE = "template.yaml"
@@ -42,12 +46,19 @@ def _yaml(data: dict) -> str:
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=100)
 
 
-def write_bundle(folder: str | Path, template: dict, values: dict, summary: dict) -> list[Path]:
-    """Write the bundle's files, all together or none (``core.files.output_set``)."""
+def write_bundle(folder: str | Path, template: dict, values: dict, summary: dict,
+                 assets: dict | None = None, requirements: str | None = None) -> list[Path]:
+    """Write the bundle's files, all together or none (``core.files.output_set``);
+    ``assets`` and ``requirements`` when given (a bundle of an earlier format lacks them)."""
     folder = check_bundle_folder(folder)
-    marker = {"generator": "xsl-render farm", "format": 1,
+    marker = {"generator": "xsl-render farm", "format": 2,
               "written": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **summary}
     with output_set():
-        return [write_json(folder / MARKER, marker),
-                write_text(folder / TEMPLATE, _yaml(template)),
-                write_text(folder / PARAMETER_VALUES, _yaml(values))]
+        written = [write_json(folder / MARKER, marker),
+                   write_text(folder / TEMPLATE, _yaml(template)),
+                   write_text(folder / PARAMETER_VALUES, _yaml(values))]
+        if assets is not None:
+            written.append(write_text(folder / ASSET_REFERENCES, _yaml(assets)))
+        if requirements is not None:
+            written.append(write_text(folder / WORKER_REQUIREMENTS, requirements))
+        return written

@@ -2,19 +2,22 @@
 
 Writes DIR/template.yaml (steps Maps, Tiles and Composite for xs and xsl; one step Render,
 a task per frame, for ``--mode guided --time-budget SECONDS``; see ``core.farm.job_template``),
-DIR/parameter_values.yaml and our marker file. Submit DIR to a farm that speaks Open Job
-Description (``deadline bundle submit DIR`` on AWS Deadline Cloud), or run it here with
-``openjd run DIR/template.yaml -p SceneFile=SCENE.blend``. A bundle folder that exists and is
-not ours is refused.
+DIR/parameter_values.yaml, DIR/asset_references.yaml (the .blend and every file it reads:
+``addon.scene.external_files``), DIR/worker_requirements.txt (the pinned versions a worker
+installs: ``core.farm.worker_requirements``) and our marker file. Submit DIR to a farm that
+speaks Open Job Description (``deadline bundle submit DIR`` on AWS Deadline Cloud), or run it
+here with ``openjd run DIR/template.yaml -p SceneFile=SCENE.blend``. A bundle folder that
+exists and is not ours is refused.
 """
 from __future__ import annotations
 
-import os
-import shutil
+import shlex
 import sys
 from pathlib import Path
 
 from ...core.errors import InputError
+from ...core.farm.worker_environment import WorkerSetup
+from ...core.farm.worker_setup import SETUPS
 from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
                      guided_options_from_args, guided_render_options, map_options_from_args,
@@ -23,6 +26,9 @@ from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments
 NAME = "farm"
 HELP = "write an Open Job Description job bundle that renders the scene on a render farm"
 DEFAULT_TASKS_PER_FRAME = 4
+DEVICES = ("CPU", "GPU")
+#: The longest task timeout: a week, as the longest time budget (core.farm.farm_job checks it).
+MAX_TIMEOUT = 7 * 24 * 3600
 
 
 def add_arguments(parser) -> None:
@@ -30,8 +36,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--bundle", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="folder for the job bundle")
     parser.add_argument("--scene-name", help="which scene of the file (default: the active one)")
-    parser.add_argument("--frames", metavar="START-END",
-                        help="frames to render: 12, 1-250 or 1-250:2 (default: the scene's range)")
+    parser.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                        help="frames to render: 12, 1-250, 1-250:2 or a list such as 1-3,8 "
+                             "(default: the scene's range)")
     parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
                         help="render resolution (default: the scene's)")
     parser.add_argument("--max-spp", type=argtypes.SAMPLES,
@@ -46,18 +53,24 @@ def add_arguments(parser) -> None:
     parser.add_argument("--output", metavar="DIR",
                         help="where the job writes its frames (default: DIR/output of the bundle)")
     parser.add_argument("--executable", metavar="PATH",
-                        help="the xsl-render command on the farm's machines (default: this one)")
+                        help="the xsl-render command on the farm's machines (default: xsl-render, "
+                             "found on each worker's PATH)")
+    parser.add_argument("--device", choices=DEVICES,
+                        help="Cycles device of the renders; GPU makes the rendering steps ask for "
+                             "a GPU in their host requirements (default: the scene's device)")
+    parser.add_argument("--task-timeout", metavar="SECONDS", type=argtypes.integer(1, MAX_TIMEOUT),
+                        help="seconds a task may run before the farm cancels it (default: twice "
+                             "the time budget plus 15 minutes for guided, 12 hours otherwise)")
+    parser.add_argument("--worker-setup", choices=SETUPS, default="none",
+                        help="how a worker gets xsl-render: none (installed, on PATH; default), "
+                             "pip or conda (installed by the job's environment, once per worker)")
+    parser.add_argument("--worker-package", metavar="SPEC",
+                        help="the xsl-render package as pip installs it on a worker: a wheel's "
+                             "path or URL, git+https://..., or a name on its index "
+                             f"(default {WorkerSetup.package})")
     add_map_arguments(parser)
     add_tile_arguments(parser)
     add_guided_arguments(parser)
-
-
-def default_executable() -> str:
-    """The ``xsl-render`` console script of the environment running now."""
-    script = Path(sys.executable).with_name("xsl-render" + (".exe" if os.name == "nt" else ""))
-    if script.is_file():
-        return str(script.absolute())
-    return shutil.which("xsl-render") or "xsl-render"
 
 
 def _output(args, bundle: Path) -> str:
@@ -83,8 +96,10 @@ def tile_options(args, max_spp: int, resolution):
 
 
 def run(args) -> int:
+    from ...core.farm.assets import asset_references
     from ...core.farm.job_bundle import check_bundle_folder, write_bundle
     from ...core.farm.job_template import FarmJob, job_template, parameter_values, parse_frames
+    from ...core.farm.worker_requirements import pinned_closure, requirements_text
 
     # Everything that needs no scene first: a bad option fails before Blender loads.
     map_options = map_options_from_args(args)
@@ -96,8 +111,15 @@ def run(args) -> int:
     else:
         tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
+    worker = WorkerSetup(setup=args.worker_setup,
+                         package=args.worker_package or WorkerSetup.package).check()
+    try:
+        requirements = requirements_text(pinned_closure())
+    except LookupError as error:
+        raise InputError(f"cannot write the worker's requirements: {error}") from None
 
     from ...addon.scene.blend_session import open_blend
+    from ...addon.scene.external_files import external_files
     from ...addon.scene.probe import camera_model, render_size
 
     scene_path = Path(args.scene).absolute()
@@ -114,20 +136,40 @@ def run(args) -> int:
         max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
         options = tile_options(args, max_spp, resolution or render_size(scene))
         what = f"{args.mode} up to {max_spp} spp, {tasks_per_frame} tile tasks per frame"
+    device = args.device or ("GPU" if scene.cycles.device == "GPU" else "CPU")
     job = FarmJob(scene=scene_path, scene_name=scene.name, frames=frames,
                   output=_output(args, bundle), mode=args.mode, map_options=map_options,
                   options=options, tasks_per_frame=tasks_per_frame,
-                  executable=args.executable or default_executable(), guided=guided).check()
+                  executable=args.executable or "xsl-render", guided=guided, device=device,
+                  task_timeout=args.task_timeout, worker=worker).check()
+    files = external_files()
+    assets = asset_references(scene_path, files, bundle / job.output)
     write_bundle(bundle, job_template(job), parameter_values(job),
-                 {"scene": str(scene_path), "scene_name": scene.name, "frames": frames})
+                 {"scene": str(scene_path), "scene_name": scene.name, "frames": frames},
+                 assets=assets, requirements=requirements)
+    _warn(scene, files)
+    width, height = options.resolution
+    command = ["openjd", "run", f"{bundle}/template.yaml", "-p", f"SceneFile={scene_path}"]
+    if Path(job.output).is_absolute():
+        command += ["-p", f"OutputDir={job.output}"]
+    print(f"wrote {bundle}/template.yaml and parameter_values.yaml: frames {frames}, "
+          f"{width}x{height}, {what}, on the {device}; {len(files.found)} file(s) the scene reads "
+          f"in asset_references.yaml; run here with: {shlex.join(command)}")
+    return 0
+
+
+def _warn(scene, files) -> None:
+    """What would make the job fail or differ on a worker, one line each."""
     if scene.render.engine != "CYCLES":
         print(f"xsl-render: warning: scene '{scene.name}' renders with {scene.render.engine}; "
               "the farm job uses Cycles", file=sys.stderr)
-    width, height = options.resolution
-    print(f"wrote {bundle}/template.yaml and parameter_values.yaml: frames {frames}, "
-          f"{width}x{height}, {what}; run here with: openjd run {bundle}/template.yaml -p SceneFile={scene_path}"
-          + (f" -p OutputDir={job.output}" if Path(job.output).is_absolute() else ""))
-    return 0
+    for path in files.missing:
+        print(f"xsl-render: warning: the scene reads {path}, which does not exist; the job "
+              "renders without it", file=sys.stderr)
+    for path in files.absolute_in_blend:
+        print(f"xsl-render: warning: the .blend names {path} by an absolute path: a worker "
+              "finds it only at that same path (File > External Data > Make Paths Relative)",
+              file=sys.stderr)
 
 
 def _guided_or_tiles(args):

@@ -15,12 +15,19 @@ current results are kept (``core.farm.files``), so a crashed or cancelled job re
         [--pilot-fraction F] [--guided-exponent Y] [--level-ratio R] [--tile-size N] [--seed N]
         [map options]
         -> the same files as composite, the frame rendered with the guided sampler
+
+maps, tiles and guided take ``--device CPU|GPU`` (the job's Device; default: the scene's).
+Every step prints ``openjd_progress: N`` and ``openjd_status: text`` lines as it goes, which
+a farm shows in its monitor. A cancelled task (SIGTERM, the template's NOTIFY_THEN_TERMINATE)
+removes its temporaries and exits 143 (``operators/signals.py``): what it finished stays,
+nothing half-written does.
 """
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+from ...core.farm.task_progress import TaskProgress
 from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
                      guided_options_from_args, guided_render_options, map_options_from_args,
@@ -30,14 +37,17 @@ NAME = "farm-task"
 HELP = ("run one task of a farm job (maps, tiles or composite of a frame, or a guided frame); "
         "used by job templates")
 MODES = ("xs", "xsl")
+DEVICES = ("CPU", "GPU")
 #: Each task keeps what it finished, with what it was made from, so a rerun resumes.
 OUTPUTS_AS_A_SET = False
 
 
-def _frame_arguments(parser) -> None:
+def _frame_arguments(parser, renders: bool = True) -> None:
     parser.add_argument("--frame", type=argtypes.FRAME, required=True, help="the frame")
     parser.add_argument("--output", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="the job's output folder")
+    if renders:
+        parser.add_argument("--device", choices=DEVICES, help="the Cycles device (default: the scene's)")
 
 
 def add_arguments(parser) -> None:
@@ -68,7 +78,7 @@ def add_arguments(parser) -> None:
     tiles.add_argument("--groups", type=int, required=True, help="tile tasks per frame")
 
     composite = steps.add_parser("composite", help="assemble a frame from its rectangles")
-    _frame_arguments(composite)
+    _frame_arguments(composite, renders=False)
     composite.add_argument("--groups", type=int, help="tile tasks per frame (for the statistics)")
 
     guided = steps.add_parser("guided", help="render a frame with the guided sampler within its time budget")
@@ -117,9 +127,13 @@ def _maps(args) -> int:
 
     map_options = _map_options(args)
     options = render_options_from_args(args)
+    report = TaskProgress()
+    report.status(f"frame {args.frame}: director maps and tile plan")
     with warnings_as_lines(MapWarning, XMapWarning):
         outcome = run_maps_task(args.scene, args.scene_name, args.frame, args.output, args.mode,
-                                map_options, options)
+                                map_options, options, device=args.device,
+                                progress=report.callback(f"frame {args.frame}: "))
+    report.progress(1.0)
     files = FrameFiles(Path(args.output), args.frame)
     if outcome.reused:
         print(f"frame {args.frame}: maps and tile plan already done ({files.plan})")
@@ -137,7 +151,12 @@ def _tiles(args) -> int:
     def log(line: str) -> None:
         print(f"frame {args.frame}, task {args.group}/{args.groups}: {line}", flush=True)
 
-    outcome = run_tiles_task(args.scene, args.frame, args.output, args.group, args.groups, log=log)
+    report = TaskProgress()
+    report.status(f"frame {args.frame}, task {args.group}/{args.groups}: reading the plan")
+    outcome = run_tiles_task(args.scene, args.frame, args.output, args.group, args.groups, log=log,
+                             device=args.device,
+                             progress=report.callback(f"frame {args.frame}, task {args.group}/{args.groups}: "))
+    report.progress(1.0)
     for warning in outcome.warnings:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     print(f"frame {args.frame}, task {args.group}/{args.groups}: {outcome.total} rectangles, "
@@ -161,7 +180,10 @@ def _composite(args) -> int:
     if args.groups is not None:
         check_groups(args.groups)
     files = FrameFiles(Path(args.output), args.frame)
+    report = TaskProgress()
+    report.status(f"frame {args.frame}: compositing")
     result = composite_frame(files, args.groups, denoiser=_blender_denoiser)
+    report.progress(1.0)
     stats = result.stats
     state = "already done" if result.skipped else "written"
     print(f"frame {args.frame}: {files.image} {state}: {stats['resolution'][0]}x{stats['resolution'][1]}, "
@@ -178,9 +200,13 @@ def _guided(args) -> int:
     guided = guided_options_from_args(args)           # --max-spp 0 became None in check()
     options = guided_render_options(guided, args.seed, parse_resolution(args.resolution))
     map_options = _map_options(args)
+    report = TaskProgress()
+    report.status(f"frame {args.frame}: guided render within {guided.time_budget:g} s")
     with warnings_as_lines(MapWarning, XMapWarning):
         outcome = run_guided_task(args.scene, args.scene_name, args.frame, args.output, guided,
-                                  map_options, options)
+                                  map_options, options, device=args.device,
+                                  progress=report.callback(f"frame {args.frame}: "))
+    report.progress(1.0)
     for warning in outcome.warnings:
         print(f"xsl-render: warning: frame {args.frame}: {warning}", file=sys.stderr)
     stats, state = outcome.stats, "already done" if outcome.reused else "written"

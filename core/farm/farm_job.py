@@ -1,0 +1,104 @@
+"""A farm job of one scene as plain data: what the bundle renders and how (``FarmJob``).
+
+``core.farm.job_parameters`` turns it into the job's parameters, ``core.farm.job_template``
+into the Open Job Description template; both check it first (``FarmJob.check``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..errors import InputError
+from ..frames import frame_expression
+from ..maps.options import MapOptions
+from ..sampling.guided_plan import MAX_TIME_BUDGET, GuidedOptions
+from ..sampling.render_options import RenderOptions
+from .task_groups import check_groups
+from .worker_environment import WorkerSetup
+
+SELECTIVE_MODES = ("xs", "xsl")
+GUIDED = "guided"
+MODES = (*SELECTIVE_MODES, GUIDED)
+#: MaxSpp of a guided job without a per-pixel ceiling. An INT parameter cannot be empty, and
+#: 0 samples per pixel means nothing else, so the farm's form can still check the number.
+NO_CEILING = 0
+#: The shortest time budget a guided job takes: a job parameter's minimum is inclusive, and
+#: the budget must be more than 0 (nothing renders in a millisecond; the bound only keeps the
+#: form's check honest).
+MIN_FARM_TIME_BUDGET = 0.001
+DEVICES = ("CPU", "GPU")
+#: The task command when the bundle names none: whatever the worker's PATH finds.
+EXECUTABLE = "xsl-render"
+#: A selective task's timeout unless --task-timeout says otherwise: a frame's maps or a
+#: share of its tiles at film resolution take minutes; twelve hours catches only a hang.
+DEFAULT_TASK_TIMEOUT = 12 * 3600
+#: A guided frame's timeout is its budget plus this (Blender starting, the .blend loading,
+#: the volumes' octree, the files written) plus the budget again, in case the machine is slow.
+GUIDED_OVERHEAD = 900
+
+
+def parse_frames(text: str) -> str:
+    """'12', '1-250', '1-250:2' or a list '1-3,8' -> its canonical form; InputError otherwise."""
+    return frame_expression(text)
+
+
+def guided_timeout(time_budget: float) -> int:
+    """Seconds a guided frame's task may take: twice its budget and a fixed allowance."""
+    return int(math.ceil(2 * time_budget)) + GUIDED_OVERHEAD
+
+
+@dataclass(frozen=True)
+class FarmJob:
+    """Everything a farm job of one scene renders, as the bundle's parameter values."""
+
+    scene: Path                     # absolute path of the .blend
+    scene_name: str
+    frames: str                     # canonical range (parse_frames)
+    output: str                     # folder; relative paths are relative to the bundle
+    mode: str
+    map_options: MapOptions
+    options: RenderOptions          # its resolution must be set (the farm never guesses)
+    tasks_per_frame: int            # tile tasks per frame (selective; a guided frame is one task)
+    executable: str = EXECUTABLE    # the xsl-render command on the farm's machines
+    guided: GuidedOptions | None = None     # the time budget and its options (guided only)
+    device: str = "CPU"             # the Cycles device of every render
+    task_timeout: int | None = None     # seconds; None: DEFAULT_TASK_TIMEOUT, or guided_timeout
+    worker: WorkerSetup = field(default_factory=WorkerSetup)
+
+    @property
+    def timeout(self) -> int:
+        """Seconds each rendering task may run before the farm cancels it."""
+        if self.task_timeout is not None:
+            return self.task_timeout
+        if self.mode == GUIDED and self.guided is not None:
+            return guided_timeout(self.guided.time_budget)
+        return DEFAULT_TASK_TIMEOUT
+
+    def check(self) -> "FarmJob":
+        if self.mode not in MODES:
+            raise InputError(f"--mode must be one of {', '.join(MODES)} for a farm job (got '{self.mode}')")
+        if self.options.resolution is None:
+            raise InputError("a farm job needs its resolution fixed")
+        self.options.check()
+        width, height = self.options.resolution
+        if self.mode == GUIDED:
+            if self.guided is None:
+                raise InputError("--mode guided needs --time-budget SECONDS")
+            self.guided.check()
+            replace(self.options, tile_size=self.guided.tile_size).check_frame(width, height)
+        elif self.guided is not None:
+            raise InputError(f"--time-budget is for --mode guided (got --mode {self.mode})")
+        self.options.check_frame(width, height)
+        self.map_options.validate()
+        check_groups(self.tasks_per_frame)
+        parse_frames(self.frames)
+        if self.device not in DEVICES:
+            raise InputError(f"--device must be one of {', '.join(DEVICES)} (got '{self.device}')")
+        if self.task_timeout is not None and not 1 <= self.task_timeout <= MAX_TIME_BUDGET:
+            raise InputError(f"--task-timeout must be between 1 and {MAX_TIME_BUDGET} seconds "
+                             f"(got {self.task_timeout})")
+        if not self.executable.strip():
+            raise InputError("--executable must not be empty")
+        self.worker.check()
+        return self
