@@ -17,6 +17,30 @@ import numpy as np
 from .errors import InputError
 
 
+#: A world matrix whose 3x3 part has a singular value this small against its largest maps
+#: the view to a plane or a line (a camera scaled to zero on an axis): no rays to cast.
+MIN_SCALE_RATIO = 1e-9
+#: Past this a transform's number is as good as infinite: Cycles computes in 32-bit floats,
+#: whose squares overflow beyond 1.8e19 (and Blender stores a typed "inf" as 3.4e38).
+MAX_TRANSFORM_VALUE = 1e19
+
+
+def check_camera_matrix(matrix, name: str = "Camera") -> None:
+    """InputError unless ``matrix`` (the camera's 4x4 world matrix) places a camera: finite
+    and within :data:`MAX_TRANSFORM_VALUE` (a NaN or infinite location, rotation or scale
+    renders nothing meaningful: a black frame with exit code 0) and invertible (a camera
+    scaled to zero has no rays; numpy would fail deep inside with LinAlgError)."""
+    matrix = np.asarray(matrix, dtype=np.float64)
+    if (matrix.shape != (4, 4) or not np.isfinite(matrix).all()
+            or np.abs(matrix).max() > MAX_TRANSFORM_VALUE):
+        raise InputError(f"camera '{name}' has a transform with NaN or infinite numbers "
+                         f"(location, rotation or scale; at most {MAX_TRANSFORM_VALUE:g})")
+    singular = np.linalg.svd(matrix[:3, :3], compute_uv=False)
+    if singular[0] == 0.0 or singular[-1] <= MIN_SCALE_RATIO * singular[0]:
+        raise InputError(f"camera '{name}' is scaled to zero (its transform is singular): "
+                         "give it a scale other than 0 on every axis")
+
+
 @dataclass(frozen=True)
 class CameraModel:
     """Everything needed to cast the camera's rays, in plain numbers.
@@ -60,6 +84,7 @@ class CameraModel:
             raise InputError(f"camera '{self.name}' has focal length {self.lens:g} <= 0")
         if self.kind == "ORTHO" and self.ortho_scale <= 0:
             raise InputError(f"camera '{self.name}' has orthographic scale {self.ortho_scale:g} <= 0")
+        check_camera_matrix(self.matrix_world, self.name)
 
     # --- the view plane -------------------------------------------------------------
     def _fit(self) -> str:

@@ -112,3 +112,24 @@ def test_projection_matches_blender(blender, kind, fit, size, shift):
         assert c == pytest.approx(ndc.x * size[0], abs=1e-4)
         assert r == pytest.approx((1.0 - ndc.y) * size[1], abs=1e-4)
         assert d == pytest.approx(ndc.z, abs=1e-6)
+
+
+@pytest.mark.parametrize("matrix, words", [
+    (np.diag([0.0, 0.0, 0.0, 1.0]), "scaled to zero"),
+    (np.diag([1.0, 0.0, 1.0, 1.0]), "scaled to zero"),
+    (np.array([[1, 2, 0, 0], [2, 4, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], float), "scaled to zero"),
+    (np.where(np.eye(4) > 0, 1.0, np.nan), "NaN or infinite"),
+    (np.array([[1, 0, 0, np.inf], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), "NaN or infinite"),
+    (np.array([[1, 0, 0, 3.4e38], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), "NaN or infinite"),
+])
+def test_a_camera_that_places_nothing_is_refused(matrix, words):
+    """Issue 23: a zero scale gave LinAlgError deep inside, a NaN location a black render."""
+    with pytest.raises(InputError, match=words):
+        CameraModel(kind="PERSP", matrix_world=matrix, width=8, height=6, name="Cam")
+
+
+@pytest.mark.parametrize("matrix", [np.diag([-1.0, 1.0, 1.0, 1.0]), np.diag([1e-3, 1e-3, 1e-3, 1.0]),
+                                    np.diag([1e3, 1.0, 1.0, 1.0])])
+def test_mirrored_small_and_stretched_cameras_are_cameras(matrix):
+    origins, directions = CameraModel(kind="PERSP", matrix_world=matrix, width=8, height=6).pixel_rays()
+    assert np.isfinite(origins).all() and np.isfinite(directions).all()
