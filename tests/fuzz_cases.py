@@ -361,3 +361,9 @@ CASES = [
     ("verbose-bad-input", ["--verbose", "render", "{blend}", "--mode", "gold", "--max-spp", "0"] + OUT,
      "from 1 to 16777216"),
 ]
+
+# Issue 23's cases: files a command must not touch (the same file in and out, FIFOs, names
+# past the system's limits), in a module of their own.
+from fuzz_cases_files import FILE_CASES  # noqa: E402
+
+CASES += FILE_CASES

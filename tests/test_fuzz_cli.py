@@ -8,7 +8,9 @@ user switched to nobody when the tests run as root (root may write anywhere).
 """
 from __future__ import annotations
 
+import hashlib
 import os
+import signal
 import sqlite3
 import subprocess
 import sys
@@ -73,10 +75,46 @@ def make_workspace(root: Path) -> dict[str, str]:
     (root / "x_spp.png").mkdir()                   # where render --out x.exr puts its samples preview
     (root / "foreign").mkdir()
     (root / "foreign" / "notes.txt").write_text("someone's files")
+    add_issue_23_files(root)
     keys = {p.stem if p.is_file() else p.name: str(p) for p in root.iterdir()}
+    keys.update(issue_23_keys(root))
     keys.update(ws=str(root), missing=str(root / "missing"), under=str(root / "file.txt" / "x"),
                 proc="/proc/xsl-render-fuzz", png=str(root / "ref.png"), exr=str(root / "ref.exr"),
                 blend=str(root / "scene.blend"))
+    return keys
+
+
+def add_issue_23_files(root: Path) -> None:
+    """Inputs an output may meet under another name, FIFOs, and folders holding them."""
+    rng = np.random.default_rng(23)
+    write_png(root / "other.png", rng.random((6, 8, 3)).astype(np.float32))
+    (root / "hm").mkdir()
+    write_png(root / "hm" / "flip.png", rng.random((6, 8, 3)).astype(np.float32))
+    os.link(root / "ref.png", root / "hard.png")
+    (root / "link.json").symlink_to(root / "scene.blend")
+    (root / "db_link.png").symlink_to(root / "empty_db.sqlite")
+    (root / "mapsdir").mkdir()
+    write_exr(root / "mapsdir" / "xsl.exr", rng.random((6, 8)).astype(np.float32))
+    write_exr(root / "x2_spp.exr", rng.random((6, 8)).astype(np.float32))
+    for suffix in ("blend", "exr", "json", "csv", "sqlite"):
+        os.mkfifo(root / f"pipe_{suffix}.{suffix}")
+    (root / "pipe_maps").mkdir()
+    os.mkfifo(root / "pipe_maps" / "xsl.exr")
+    (root / "pipe_stimuli").mkdir()
+    os.mkfifo(root / "pipe_stimuli" / "a.gold.png")
+    write_png(root / "pipe_stimuli" / "a.test.png", rng.random((4, 4, 3)).astype(np.float32))
+
+
+def issue_23_keys(root: Path) -> dict[str, str]:
+    """The FIFOs by name, and two outputs whose own names fit: one whose ``_spp.exr`` does
+    not, one whose temporary name (``.NAME.<pid>-<token>.partial.exr``) does not."""
+    from xsl_render.core.temporaries import temporary_name
+
+    extra = len(temporary_name(root / "o.exr").name) - len("o.exr")     # grows with the pid
+    keys = {f"pipe_{suffix}": str(root / f"pipe_{suffix}.{suffix}") for suffix in ("blend", "exr", "json", "csv", "sqlite")}
+    keys.update(pipe_maps=str(root / "pipe_maps"), pipe_stimuli=str(root / "pipe_stimuli"),
+                spp_too_long=str(root / ("s" * (255 - extra - 2 - 4) + ".exr")),       # _spp adds 4 bytes
+                temporary_too_long=str(root / ("t" * (255 - 4 - extra + 1) + ".exr")))
     return keys
 
 
@@ -87,7 +125,10 @@ def workspace(tmp_path_factory):
 
 
 def snapshot(root: Path) -> dict:
-    return {str(p.relative_to(root)): (p.stat().st_size, p.stat().st_mtime_ns) if p.is_file() else None
+    """Every file of ``root`` with its size, time and bytes' hash (an input overwritten with
+    the same size in the same tick still shows); FIFOs are only named, never opened."""
+    return {str(p.relative_to(root)): (p.stat().st_size, p.stat().st_mtime_ns,
+                                       hashlib.sha256(p.read_bytes()).hexdigest()) if p.is_file() else None
             for p in sorted(root.rglob("*"))}
 
 
@@ -118,6 +159,27 @@ ISSUE_15 = {
 }
 
 
+#: Issue 23's lists, case by case: data loss, hangs, tracebacks, wrong codes (the write
+#: errors and cameras are tests below; the server's signals are in test_experiment_server).
+ISSUE_23 = {
+    "data loss": ["render-stats-is-scene", "e2e-render-stats-is-scene", "compare-json-is-ref",
+                  "compare-heatmap-is-ref", "compare-heatmap-is-test", "saliency-png-is-image",
+                  "saliency-out-is-image", "hotspots-out-is-image", "render-out-is-map", "render-stats-is-map",
+                  "render-stats-is-budget"],
+    "hangs": ["info-fifo", "e2e-info-fifo", "compare-fifo", "saliency-fifo", "render-map-fifo",
+              "render-budget-fifo", "hotspots-fifo-csv", "e2e-hotspots-fifo-csv"],
+    "tracebacks": ["render-out-name-too-long", "render-spp-name-too-long", "e2e-render-spp-name-too-long",
+                   "info-name-too-long", "compare-json-name-too-long", "maps-out-name-too-long",
+                   "e2e-maps-out-name-too-long"],
+}
+
+
+@pytest.mark.parametrize("kind", sorted(ISSUE_23))
+def test_issue_23_case_is_in_the_table(kind):
+    ids = {case[0] for case in CASES + UNPRIVILEGED + END_TO_END}
+    assert set(ISSUE_23[kind]) <= ids, set(ISSUE_23[kind]) - ids
+
+
 @pytest.mark.parametrize("point", sorted(ISSUE_15))
 def test_issue_15_point_is_in_the_table(point):
     """Every bad input of the issue's point is a case of the table (which runs it)."""
@@ -125,11 +187,22 @@ def test_issue_15_point_is_in_the_table(point):
     assert set(ISSUE_15[point]) <= ids, set(ISSUE_15[point]) - ids
 
 
+def _timeout(signum, frame):
+    raise TimeoutError("the command hung (a FIFO opened?)")
+
+
 def _run_in_process(argv: list[str], cwd: Path, capfd, monkeypatch) -> tuple[int, str, str]:
     monkeypatch.chdir(cwd)
     monkeypatch.setitem(sys.modules, "bpy", None)       # `import bpy` now fails: no case may load Blender
     capfd.readouterr()
-    code = main(argv)
+    # A case that opens a FIFO would wait for ever: the alarm ends it as a failure.
+    previous = signal.signal(signal.SIGALRM, _timeout)
+    signal.alarm(60)
+    try:
+        code = main(argv)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
     out, err = capfd.readouterr()
     return code, out, err
 
@@ -243,6 +316,11 @@ END_TO_END = [
     ("e2e-render-guided-budget-zero", R + ["--mode", "guided", "--time-budget", "0"] + OUT, "greater than 0"),
     ("e2e-render-guided-budget-nan", R + ["--mode", "guided", "--time-budget", "nan"] + OUT, "not nan"),
     ("e2e-compare-exposure", ["compare", "{exr}", "{exr}", "--exposure", "1000"], "at most 64"),
+    ("e2e-render-stats-is-scene", RG + OUT + ["--stats", "{blend}"], "--stats and SCENE.blend name the same file"),
+    ("e2e-info-fifo", ["info", "{pipe_blend}"], "is a FIFO"),
+    ("e2e-hotspots-fifo-csv", ["hotspots", "{png}", "{pipe_csv}", "--out", "{ws}/h.png"], "is a FIFO"),
+    ("e2e-maps-out-name-too-long", ["maps", "{blend}", "--out", "{ws}/" + "d" * 300], "file name too long"),
+    ("e2e-render-spp-name-too-long", RG + ["--out", "{spp_too_long}"], "its samples: file name too long"),
 ]
 
 
