@@ -52,7 +52,7 @@ def _predict(medium, rays, rates=(1.0,), runs=16):
     from xsl_render.core.maps.transmittance import medium_segments
 
     predictor = MarchingPredictor(rays, [medium], [medium_segments(rays, medium)],
-                                  np.arange(rays.count), finest_rate=min(rates), runs=runs)
+                                  np.arange(rays.count), runs=runs)
     return {rate: predictor.error(rate) for rate in rates}
 
 
@@ -194,7 +194,7 @@ def test_predicted_bias_matches_cycles_ray_marching(blender):
     assert {m.kind for m in media} == {"mesh", "volume_object"}
     assert all(math.isfinite(m.extra["cycles_step"]) for m in media)
     predictor = MarchingPredictor(result.rays, media, [medium_segments(result.rays, m) for m in media],
-                                  np.arange(result.rays.count), finest_rate=2.0, runs=36)
+                                  np.arange(result.rays.count), runs=36)
     truth, _ = render_transmittance(scene, samples=64, step_rate=0.05)
     truth = truth.reshape(-1, 3)
     hit = result.rays.hit.ravel()               # the oracle's sky is black, not exp(-tau)

@@ -15,14 +15,15 @@ from dataclasses import replace
 from ...core.maps.transmittance import medium_segments
 from ...core.media.ray_marching import MarchingPredictor, sample_pixels
 from ...core.sampling.render_options import RenderOptions
-from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
-                                               fixed_choice, visible_bias)
+from ...core.sampling.volume_estimator import (EstimatorChoice, choose_step_rate, fixed_choice,
+                                               visible_bias)
 from ..scene.geometry import scan_scene
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
 
-#: Camera rays the prediction marches (its 95th percentile needs a few hundred at least).
-PREDICTION_PIXELS = 1200
+#: Camera rays the prediction marches: its 95th percentile needs a few hundred; each costs
+#: RUNS marches of up to 4 / rate steps per medium crossing (balls_b: 0.3 s in all).
+PREDICTION_PIXELS = 600
 
 
 def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoice:
@@ -53,7 +54,7 @@ def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoi
     rays = cast_camera_rays(camera, geometry)
     segments = [medium_segments(rays, m) for m in media]
     pixels = sample_pixels(rays.shape, PREDICTION_PIXELS)
-    predictor = MarchingPredictor(rays, media, segments, pixels, finest_rate=min(CANDIDATE_RATES))
+    predictor = MarchingPredictor(rays, media, segments, pixels)
     if not predictor.heterogeneous:
         choice = EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
                                  reason="homogeneous media only: ray marching takes each in one "

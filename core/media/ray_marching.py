@@ -40,7 +40,7 @@ PROCEDURAL_STEP_FRACTION = 0.1
 #: evenly too; a square grid gives u + v few distinct values and aliases on periodic media.
 RUNS = 16
 _GOLDEN = 0.6180339887498949
-#: Midpoint samples per marching step at the finest rate asked for, for the true integral.
+#: Midpoint samples per Cycles step, at the finest rate asked for, of the true integral.
 REFERENCE_REFINE = 4
 #: Points evaluated at once (bounds memory, not results).
 _CHUNK_POINTS = 1 << 18
@@ -130,8 +130,8 @@ def _extinction(media, active, points) -> np.ndarray:
 class MarchingPredictor:
     """The error of Cycles' ray marching along sampled camera rays, at any scene step rate.
 
-    The rays' pieces and the true optical depth are found once; ``error(rate)`` then
-    marches the pieces as Cycles would at that rate (cached per rate).
+    The rays' pieces are found once; ``error(rate)`` then marches them as Cycles would at
+    that rate, against their true optical depth (cached per rate).
 
     Parameters
     ----------
@@ -144,9 +144,6 @@ class MarchingPredictor:
         Each medium's pieces of the rays (``core.maps.transmittance.medium_segments``).
     pixels : (n,) int array
         Flat indices of the rays to evaluate.
-    finest_rate : float
-        The smallest rate ``error`` will be asked for: the true optical depth is integrated
-        ``REFERENCE_REFINE`` times finer than Cycles' steps at that rate.
     runs : int
         The number of (u, v) offset pairs (``RUNS``).
     max_steps : int
@@ -154,8 +151,7 @@ class MarchingPredictor:
     """
 
     def __init__(self, rays, media: list[VolumeMedium], segments, pixels: np.ndarray,
-                 finest_rate: float = 0.25, runs: int = RUNS,
-                 max_steps: int = CYCLES_MAX_STEPS):
+                 runs: int = RUNS, max_steps: int = CYCLES_MAX_STEPS):
         self.media = media
         self.pixels = np.asarray(pixels, np.int64)
         self.origins = rays.origins.reshape(-1, 3)[self.pixels]
@@ -168,11 +164,24 @@ class MarchingPredictor:
         self.pieces = _ray_pieces(rays, media, segments, self.pixels)
         # Pieces in homogeneous media only are marched in one exact step at every rate.
         self.tau_exact = np.zeros((len(self.pixels), 3))
+        for active, rows, a, b, count in self._batches(1.0):
+            if count == 0:
+                self._integrate(self.tau_exact, active, rows, a, b, 1)
         self.tau_stepped = np.zeros((len(self.pixels), 3))
-        for active, rows, a, b, count in self._batches(finest_rate):
-            self._integrate(self.tau_exact if count == 0 else self.tau_stepped, active, rows, a, b,
-                            1 if count == 0 else max(count * REFERENCE_REFINE, 16))
+        self._truth_rate = math.inf
         self._cache: dict[float, MarchingError] = {}
+
+    def _true_depth(self, rate: float) -> None:
+        """The stepped pieces' optical depth, ``REFERENCE_REFINE`` times finer than Cycles'
+        steps at ``rate``; integrated again only when a finer rate is asked for (the small
+        rates are asked last: they cost the most)."""
+        if rate >= self._truth_rate:
+            return
+        self.tau_stepped = np.zeros((len(self.pixels), 3))
+        for active, rows, a, b, count in self._batches(rate):
+            if count:
+                self._integrate(self.tau_stepped, active, rows, a, b, max(count * REFERENCE_REFINE, 16))
+        self._truth_rate = rate
 
     @property
     def heterogeneous(self) -> bool:
@@ -200,8 +209,10 @@ class MarchingPredictor:
             if math.isfinite(step):
                 length = b - a
                 step = max(min(step, length), length / self.max_steps)
-                # Powers of two: the pieces fall into a few vectorised batches.
-                count = 1 << max(0, int(math.ceil(length / step)).bit_length())
+                # Steps a piece can take (its first is a fraction u of one), rounded up to
+                # even so that the pieces fall into fewer vectorised batches.
+                count = int(math.ceil(length / step)) + 1
+                count += count % 2
             groups.setdefault((active, count), []).append((ray, a, b))
         for (active, count), pieces in groups.items():
             rows, a, b = (np.array(column) for column in zip(*pieces))
@@ -211,6 +222,7 @@ class MarchingPredictor:
         """The marching's bias and one-sample spread in exp(-tau) at scene step ``rate``."""
         rate = float(rate)
         if rate not in self._cache:
+            self._true_depth(rate)
             runs = len(self.u)
             tau_runs = np.repeat(self.tau_exact[:, None, :], runs, axis=1)
             for active, rows, a, b, count in self._batches(rate):
