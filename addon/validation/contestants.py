@@ -133,5 +133,19 @@ def run_contestant(scene, contestant: Contestant, options: RenderOptions, budget
     if contestant.time_of is not None and not (budget_s and budget_s > 0):
         raise InputError(f"{contestant.name} needs a positive time budget (from {contestant.time_of})")
     started = time.perf_counter()
+    options = _with_estimator(scene, contestant, options)
     outcome = renderer(scene, contestant, options, budget_s, progress)
     return outcome, time.perf_counter() - started
+
+
+def _with_estimator(scene, contestant: Contestant, options: RenderOptions) -> RenderOptions:
+    """A contestant's ``estimator`` (and ``step_rate``) parameters, auto chosen here: inside
+    the run's time, as ``xsl-render render --estimator auto`` chooses it."""
+    from ..maps.estimator_choice import estimator_spp, with_estimator_choice
+
+    if "estimator" not in contestant.params:
+        return options
+    options = replace(options, estimator=contestant.params["estimator"],
+                      step_rate=contestant.params.get("step_rate")).check()
+    budget = {"spp": contestant.params.get("spp")}
+    return with_estimator_choice(scene, options, estimator_spp(contestant.kind, options, budget))

@@ -35,7 +35,7 @@ import math
 from dataclasses import dataclass
 
 #: Metrics read along curves, and whether their value is an error (lower is better).
-LOWER_IS_BETTER = {"flip": True, "mse": True, "jod": False}
+LOWER_IS_BETTER = {"flip": True, "flip_tile95": True, "flip_share": True, "mse": True, "jod": False}
 #: ColorVideoVDP's score for an image identical to the reference.
 JOD_MAX = 10.0
 

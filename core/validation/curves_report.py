@@ -18,7 +18,8 @@ SPEEDUP_NOTE = ("Equal-quality speedup: the time the baseline curve needs to rea
                 "(read log-log along the curve's lower envelope) divided by the run's time; above "
                 "1.00&times; (in bold) the run is faster at equal quality, otherwise it is not. "
                 "<b>*</b> extrapolated beyond the curve's measured range along its end segment.")
-METRIC_LABELS = {"flip": "FLIP", "mse": "MSE", "jod": "JOD"}
+METRIC_LABELS = {"flip": "FLIP", "flip_tile95": "FLIP p95 region", "flip_share": "% FLIP > 0.103",
+                 "mse": "MSE", "jod": "JOD"}
 
 
 def speedup_cell(speedup: dict | None) -> str:
@@ -57,7 +58,8 @@ def curves_table(data: dict) -> str:
                                                      if repeats > 1 else "")
             cells = [f"<td class=l>{escape(run['label'])}</td>", f"<td>{time_cell}</td>",
                      _value(run["mean_spp"], ".1f")]
-            cells += [_value(run[m], {"flip": ".4f", "mse": ".3g", "jod": ".3f"}[m]) for m in metrics]
+            cells += [_value(run[m], {"flip": ".4f", "flip_tile95": ".4f", "flip_share": ".2f", "mse": ".3g",
+                                          "jod": ".3f"}[m]) for m in metrics]
             for baseline in baselines:
                 speedups = run["speedups"].get(baseline)
                 if speedups is None:

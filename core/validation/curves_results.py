@@ -7,8 +7,10 @@ Schema (one file per scene and resolution)::
     ceiling     the contestants' ceiling (the gold standard's samples per pixel)
     reference   {path, key, source: shipped|cache|rendered|given, inputs: {spp, seed, ...}}
     repeats     N; seeds: the contestants' seeds (each contestant renders once per seed)
-    metrics     ["flip", "mse", "jod"]: HDR-FLIP mean, MSE of the display-referred images,
-                ColorVideoVDP JOD (None where it did not run; vdp.skipped says why)
+    metrics     ["flip", "flip_tile95", "flip_share", "mse", "jod"]: HDR-FLIP mean, the 95th
+                percentile of 32-px regions' mean FLIP, % of pixels above FLIP 0.103, MSE of
+                the display-referred images, ColorVideoVDP JOD (None where it did not run;
+                vdp.skipped says why)
     curves      {name: {label, baseline, points: [run names, budget growing]}}
     runs        {name: {curve, kind, label, params, time_of, gold, budget_s,
                         repeats: [{seed, seconds, mean_spp, flip, mse, jod, file, reused, stats}],
@@ -27,11 +29,13 @@ import statistics
 from .contestants import Contestant
 from .curves import speedups_against
 
-METRICS = ("flip", "mse", "jod")
+#: flip_tile95: the 95th percentile of 32-px regions' mean FLIP (no region visibly worse);
+#: flip_share: % of pixels with FLIP above 0.103 (the paper's Table II).
+METRICS = ("flip", "flip_tile95", "flip_share", "mse", "jod")
 #: Statistics of a render kept with each repeat in curves.json.
 STATS_KEPT = ("mode", "wall_s", "phases_s", "total_samples", "mean_spp", "renders", "max_spp",
               "noise_threshold", "time_budget_s", "stopped_by_time", "ideal_speedup",
-              "director_map_mean", "path_guiding", "guided", "pilot_spp")
+              "director_map_mean", "path_guiding", "guided", "pilot_spp", "estimator")
 
 
 def metric_values(metrics: dict) -> dict[str, float | None]:
@@ -40,7 +44,9 @@ def metric_values(metrics: dict) -> dict[str, float | None]:
     def value(name: str, key: str):
         summary = metrics.get(name) or {}
         return None if summary.get("skipped") or summary.get(key) is None else float(summary[key])
-    return {"flip": value("flip", "mean_flip"), "mse": value("mse", "mse"), "jod": value("vdp", "jod")}
+    return {"flip": value("flip", "mean_flip"), "flip_tile95": value("flip", "tile95_flip"),
+            "flip_share": value("flip", "error_pixel_percent"), "mse": value("mse", "mse"),
+            "jod": value("vdp", "jod")}
 
 
 def _median(values) -> float | None:
