@@ -8,6 +8,7 @@ thought of restoring shows up too.
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES
@@ -124,3 +125,21 @@ def test_render_gold_writes_exr_and_refuses_another_extension(blender, addon, tm
     spec = oiio.ImageInput.open(str(tmp_path / "g.exr")).spec()
     assert spec.format.basetype == oiio.FLOAT and spec.nchannels == 4
     assert read_image(tmp_path / "g.exr").shape == (18, 32, 4)
+
+
+def test_neither_the_batch_entry_nor_the_panel_writes_over_the_open_file(addon, road, tmp_path, capfd):
+    """Issue 23: the open .blend is an input of every batch command and panel render: an
+    output named like it, or a symlink to it, is refused before any work, the file untouched."""
+    import bpy
+
+    blend = Path(bpy.data.filepath)
+    saved = blend.read_bytes()
+    with pytest.raises(SystemExit) as done:
+        addon.batch(["render", "--mode", "gold", "--max-spp", "1", "--out", str(tmp_path / "g.exr"),
+                     "--stats", str(blend), "--quiet"])
+    err = capfd.readouterr().err.strip().splitlines()
+    assert done.value.code == 2 and len(err) == 1 and "--stats and the open file name the same file" in err[0]
+    (tmp_path / "link.exr").symlink_to(blend)
+    with pytest.raises(RuntimeError, match="the output link.exr and the open file name the same file"):
+        bpy.ops.xsl.render_gold(filepath=str(tmp_path / "link.exr"))
+    assert blend.read_bytes() == saved and sorted(p.name for p in tmp_path.iterdir()) == ["link.exr", "road.blend"]
