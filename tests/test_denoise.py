@@ -52,3 +52,53 @@ def test_selective_frames_are_denoised_whole_with_composited_guides(fog):
     assert error(denoised.image, reference) < 0.5 * error(raw.image, reference)
     # The same samples went in: denoising changes pixels, not the plan.
     np.testing.assert_array_equal(denoised.samples, raw.samples)
+
+
+def test_direct_oidn_is_the_compositors_denoise_bit_for_bit(blender):
+    """The library call and the compositor's Denoise node (Fast, High, HDR) on one noisy frame
+    with guides, and on one without: identical pixels, so the converged references stay valid."""
+    from xsl_render.addon.cycles import denoise as module
+    from xsl_render.addon.cycles.oidn_library import load
+
+    assert load() is not None, "Blender's Open Image Denoise library was not found"
+    rng = np.random.default_rng(3)
+    rows, cols = np.mgrid[0:40, 0:56]
+    clean = np.stack([0.5 + 0.4 * np.sin(cols / 7), 0.3 + 0.2 * np.cos(rows / 5),
+                      0.2 + 0.1 * np.sin((cols + rows) / 9)], axis=-1)
+    noisy = (clean * rng.gamma(2.0, 0.5, size=clean.shape)).astype(np.float32)
+    rgba = np.concatenate([noisy, rng.random((40, 56, 1), dtype=np.float32)], axis=-1)
+    albedo = (0.8 * clean).astype(np.float32)
+    normal = np.zeros_like(albedo)
+    normal[..., 2] = 1.0
+    for guides in ((albedo, normal), (None, None)):
+        direct = module.denoise(rgba, *guides)
+        through = module._compositor_denoise(rgba, *guides)
+        np.testing.assert_array_equal(direct[..., :3], np.maximum(through, 0.0))
+        np.testing.assert_array_equal(direct[..., 3], rgba[..., 3])
+
+
+def test_a_denoise_between_renders_keeps_the_synced_scene(blender):
+    """Cycles keeps a scene synced between renders (persistent data) unless Blender renders
+    another scene or a datablock comes or goes: a denoise in the middle of a run (the guided
+    pilot's) must not make the next render sync heterogeneous fog again (its octree)."""
+    import time
+
+    import xmap_scenes as xs
+
+    from xsl_render.addon.cycles.denoise import denoise
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+    from xsl_render.addon.scene.state import preserved_scene
+
+    scene = xs.base_scene(blender, 32, 18)
+    scene.render.engine = "CYCLES"
+    xs.ground_and_props(blender)
+    xs.add(blender, "primitive_cube_add", xs.noise_fog_material(blender), size=6.0, location=(0.0, 6.0, 1.0))
+    with preserved_scene(scene), CyclesWindowRenderer(scene, 0, guides=True) as renderer:
+        started = time.perf_counter()
+        first = renderer.render(None, 1)                # syncs the scene, octree and all
+        sync = time.perf_counter() - started
+        denoise(first.pixels, first.guides[..., :3], first.guides[..., 3:])
+        started = time.perf_counter()
+        renderer.render((0, 8, 0, 8), 2)
+        again = time.perf_counter() - started
+    assert again < 0.25 * sync, (again, sync)
