@@ -95,6 +95,7 @@ def add_issue_23_files(root: Path) -> None:
     (root / "db_link.png").symlink_to(root / "empty_db.sqlite")
     (root / "mapsdir").mkdir()
     write_exr(root / "mapsdir" / "xsl.exr", rng.random((6, 8)).astype(np.float32))
+    (root / "mapsdir" / "maps.json").write_text('{"mean_spp": 4, "wall_s": 1.0}')
     write_exr(root / "x2_spp.exr", rng.random((6, 8)).astype(np.float32))
     for suffix in ("blend", "exr", "json", "csv", "sqlite"):
         os.mkfifo(root / f"pipe_{suffix}.{suffix}")

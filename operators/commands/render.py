@@ -85,23 +85,25 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
     from .render_animation import maps_folder
 
     inputs = {"--maps' map": _map_file(args)} if args.maps else {}
+    # --save-maps keeps maps computed here: none for a baseline, or a map given.
+    save_maps = args.save_maps if args.mode in ("xs", "xsl", "guided") and not (args.map or args.maps) else None
     frames = _frames(args)
     outputs = {}
     if frames is None:
         outputs.update(render_output_paths(out or args.out, args.stats))
-        if args.save_maps:
-            outputs.update({f"--save-maps' {name}": path for name, path in map_set_paths(args.save_maps).items()})
+        if save_maps and args.mode != "guided":
+            outputs.update({f"--save-maps' {name}": path for name, path in map_set_paths(save_maps).items()})
         return inputs, outputs
     for frame in frames:
         path = frame_path(str(args.out), frame)
         for label, file in render_output_paths(path).items():
             outputs[label.replace("its ", f"frame {frame}'s ") if label != "--out" else f"frame {frame}"] = file
-        if args.save_maps:
-            folder = maps_folder(args.save_maps, frame)
+        if save_maps:
+            folder = maps_folder(save_maps, frame)
             outputs.update({f"--save-maps' {folder.name}/{name}": path
                             for name, path in map_set_paths(folder).items()})
-    if args.save_maps:
-        outputs["--save-maps' ray cache"] = Path(args.save_maps) / CACHE_NAME
+    if save_maps:
+        outputs["--save-maps' ray cache"] = Path(save_maps) / CACHE_NAME
     outputs["--stats"] = args.stats
     return inputs, outputs
 
