@@ -80,17 +80,22 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     chosen in the panel; or, with the Time Budget sampler, the guided render within the
     budget (its importance map computed first, inside the budget; every frame of an
     animation gets its own budget)."""
-    from ..addon.animation import guided_frame, selective_frame
+    from ..addon.animation import estimated_frame, guided_frame, selective_frame
+    from ..addon.maps.estimator_choice import estimator_spp
 
     settings = scene.xsl_render
     options = render_options(settings)
     if uses_budget(settings):
         guided = guided_options(settings)
-        frame_job = guided_frame(guided, map_options(settings), options, ray_cache_dir(scene))
-        label = "Guided render"
+        label, mode = "Guided render", "guided"
+        frame_job = estimated_frame(
+            lambda chosen: guided_frame(guided, map_options(settings), chosen, ray_cache_dir(scene)),
+            options, estimator_spp(mode, options, {"guided": guided}))
     else:
         mode = settings.director.lower()
-        frame_job = selective_frame(map_options(settings), options, mode, ray_cache_dir(scene))
+        frame_job = estimated_frame(
+            lambda chosen: selective_frame(map_options(settings), chosen, mode, ray_cache_dir(scene)),
+            options, estimator_spp(mode, options))
         label = f"{mode.upper()} render"
     if animation:
         return _animation_job(scene, label, frame_job, options, filepath, gold=False)
@@ -100,15 +105,19 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
 def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = False) -> Job:
     """Max samples everywhere: one Cycles render, or (``banded``, the panel) full-width bands
     bit-identical to it that a modal operator can stop between."""
-    from ..addon.animation import single_render_frame, stepped_render_frame
+    from ..addon.animation import estimated_frame, single_render_frame, stepped_render_frame
     from ..addon.cycles.banded_gold import gold_band_steps
     from ..addon.cycles.selective_render import render_gold
 
     options = render_options(scene.xsl_render)
     if banded:
-        frame_job = stepped_render_frame(lambda s: gold_band_steps(s, options))
+        frame_job = estimated_frame(
+            lambda chosen: stepped_render_frame(lambda s: gold_band_steps(s, chosen)),
+            options, options.max_spp)
     else:
-        frame_job = single_render_frame(lambda s: render_gold(s, options), "gold")
+        frame_job = estimated_frame(
+            lambda chosen: single_render_frame(lambda s: render_gold(s, chosen), "gold"),
+            options, options.max_spp)
     if animation:
         return _animation_job(scene, "Gold render", frame_job, options, filepath, gold=True)
     return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))

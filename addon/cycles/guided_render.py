@@ -105,7 +105,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     # Auto's estimator prediction ran before, inside the budget like the importance map.
     chosen_s = options.volume_estimator().seconds
     clock = _Clock(already=map_seconds + chosen_s)
-    phases: dict[str, float] = {"maps": map_seconds, "estimator": chosen_s}
+    phases: dict[str, float] = {"maps": map_seconds} | ({"estimator": chosen_s} if chosen_s else {})
     with preserved_scene(scene):
         width, height, warnings = prepare_render(scene, options)
         if importance is not None:

@@ -82,8 +82,9 @@ def render_stats(mode: str, scene, options: RenderOptions, width: int, height: i
            samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str]) -> dict:
     total = float(samples.sum(dtype=np.float64))
     estimator = options.volume_estimator()
-    # Auto's prediction is part of the run (a phase, counted in its time).
-    phases.setdefault("estimator", estimator.seconds)
+    if estimator.seconds:
+        # Auto's prediction is part of the run (a phase, counted in its time).
+        phases.setdefault("estimator", estimator.seconds)
     return {
         "mode": mode,
         "scene": scene.name,

@@ -144,6 +144,7 @@ class RENDER_PT_xsl_render_sampling(_XSLPanel, bpy.types.Panel):
         row.active = not uses_budget(settings)
         row.prop(settings, "min_spp")
         layout.prop(settings, "tile_size")
+        layout.prop(settings, "volume_estimator")
         layout.prop(settings, "denoise")
 
 

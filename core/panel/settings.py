@@ -38,6 +38,11 @@ IMPORTANCE_ITEMS = (("NONE", "None", "Weigh every tile's estimated error alike")
                     ("X", "X", "Weigh the error by the extinction (X) map: less where the medium hides"),
                     ("XS", "XS", "Weigh the error by the XS map (extinction and saliency)"),
                     ("XSL", "XSL", "Weigh the error by the XSL map (also the glow of lights)"))
+ESTIMATOR_ITEMS = (("SCENE", "Scene", "The scene's own volume settings (Render > Volumes)"),
+                   ("AUTO", "Auto", "Ray marching at the largest step whose bias, predicted from "
+                    "the media, hides in the render's noise; null scattering where it would show"),
+                   ("UNBIASED", "Unbiased", "Null scattering, Blender's default"),
+                   ("BIASED", "Biased", "Ray marching at the scene's step rate"))
 #: The sampler whose settings are the guided render's (``guided_options``).
 BUDGET_SAMPLER = "BUDGET"
 
@@ -105,6 +110,9 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("tile_size", "int", "Tile Size",
             "Edge of the square tiles the render plan starts from (split down to 8 px where it pays)",
             32, min=MIN_TILE_SIZE, max=4096, soft_max=256),
+    Setting("volume_estimator", "enum", "Volume Estimator",
+            "How Cycles estimates the fog and smoke of this render (the scene keeps its own "
+            "settings)", "SCENE", items=ESTIMATOR_ITEMS),
     Setting("denoise", "bool", "Denoise",
             "Denoise every finished frame (gold and selective alike) with Open Image Denoise, "
             "guided by albedo and normal; the tiles themselves are never denoised one by one",
@@ -166,7 +174,8 @@ def render_options(settings) -> RenderOptions:
     Samples only counts for the director-map sampler (the guided render has no floor)."""
     min_spp = 1 if uses_budget(settings) else int(settings.min_spp)
     return RenderOptions(max_spp=int(settings.max_spp), min_spp=min_spp,
-                         tile_size=int(settings.tile_size), denoise=bool(settings.denoise)).check()
+                         tile_size=int(settings.tile_size), denoise=bool(settings.denoise),
+                         estimator=str(getattr(settings, "volume_estimator", "SCENE")).lower()).check()
 
 
 def guided_options(settings) -> GuidedOptions:

@@ -24,11 +24,26 @@ def run(args) -> int:
     scene = open_blend(args.scene, args.scene_name)
     info = describe_scene(scene, bpy.context.evaluated_depsgraph_get())
     info["file"] = str(args.scene or bpy.data.filepath or "(unsaved)")
+    info["estimator"] = _estimator(scene, info)
     if args.json:
         print(json.dumps(info, indent=2))
     else:
         print(format_text(info))
     return 0
+
+
+def _estimator(scene, info: dict) -> dict:
+    """How the scene estimates its volumes, and what ``--estimator auto`` would choose at its
+    own samples per pixel (with the predicted visible bias of each step rate it tried)."""
+    from ...addon.maps.estimator_choice import choose_estimator
+    from ...core.sampling.render_options import RenderOptions
+
+    cycles = getattr(scene, "cycles", None)
+    spp = info["render"]["samples"] or 1
+    own = {"biased": bool(getattr(cycles, "volume_biased", False)),
+           "step_rate": float(getattr(cycles, "volume_step_rate", 1.0))}
+    chosen = choose_estimator(scene, RenderOptions(max_spp=spp, estimator="auto"), spp)
+    return {"scene": own, "auto": chosen.to_dict() | {"spp": spp, "described": chosen.describe()}}
 
 
 def _fmt(values) -> str:
@@ -55,6 +70,14 @@ def format_text(info: dict) -> str:
         ext = (f", extinction {_fmt(medium['extinction'])}/unit" if medium["extinction"] else "")
         where = "" if medium["bbox_min"] is None else f", bounds {_fmt(medium['bbox_min'])}..{_fmt(medium['bbox_max'])}"
         lines.append(f"medium  {medium['name']} ({medium['kind']}): {closures}{ext}{where}")
+    estimator = info.get("estimator")
+    if estimator:
+        own, auto = estimator["scene"], estimator["auto"]
+        scene_way = (f"ray marching at step rate {own['step_rate']:g}" if own["biased"]
+                     else "null scattering (unbiased)")
+        tried = ", ".join(f"{rate}: {value:.2%}" for rate, value in (auto.get("tried") or {}).items())
+        lines.append(f"volumes {scene_way}; --estimator auto at {auto['spp']} spp: {auto['described']} "
+                     f"({auto['reason']}{'; predicted bias by step rate ' + tried if tried else ''})")
     if not info["lights"]:
         lines.append("lights  none in frame")
     for light in info["lights"]:
