@@ -115,14 +115,14 @@ def test_sample_pixels_cover_the_window_evenly():
 
 
 def test_auto_takes_the_largest_rate_within_the_noise():
-    measures = {4.0: 0.30, 2.0: 0.05, 1.0: 0.02, 0.5: 0.004, 0.25: 0.001}
+    measures = {4.0: 0.30, 2.0: 0.05, 1.0: 0.01, 0.5: 0.004, 0.25: 0.001}
     asked = []
 
     def measure(rate):
         asked.append(rate)
         return measures[rate]
 
-    assert tolerated_bias(16) == pytest.approx(0.0375)
+    assert tolerated_bias(16) == pytest.approx(0.0125)
     choice = choose_step_rate(measure, spp=16)
     assert (choice.biased, choice.step_rate) == (True, 1.0)
     assert asked == [4.0, 2.0, 1.0]                     # stops at the first that passes
