@@ -171,10 +171,13 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output:
         return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started, stats=finished)
 
     from ..core.progress import run_steps
-    from .animation import guided_frame
+    from .animation import estimated_frame, guided_frame
+    from .maps.estimator_choice import estimator_spp
 
     scene = _open(scene_path, scene_name, frame, device)
-    outcome = run_steps(guided_frame(guided, map_options, options)(scene), progress).outcome
+    job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen), options,
+                          estimator_spp("guided", options, {"guided": guided}))
+    outcome = run_steps(job(scene), progress).outcome
     stats = guided_frame_record(inputs, {**outcome.stats, "frame": frame, "file": str(scene_path),
                                          "out": str(files.image)})
     scale = preview_scale(guided.max_spp, outcome.samples)

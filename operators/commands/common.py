@@ -97,11 +97,11 @@ def add_estimator_arguments(parser) -> None:
     from ...core.sampling.volume_estimator import ESTIMATORS, MAX_STEP_RATE, MIN_STEP_RATE
 
     group = parser.add_argument_group("volume estimator")
-    group.add_argument("--estimator", choices=ESTIMATORS, default="scene",
-                       help="scene: the scene's own volume settings (default); unbiased: null "
-                            "scattering; biased: ray marching; auto: ray marching at the largest "
-                            "step rate whose predicted bias hides in the run's noise, else null "
-                            "scattering")
+    group.add_argument("--estimator", choices=ESTIMATORS, default=None,
+                       help="scene: the scene's own volume settings (the default of every mode "
+                            "but guided); unbiased: null scattering; biased: ray marching; auto "
+                            "(guided's default): ray marching at the largest step rate whose "
+                            "predicted bias hides in the run's noise, else null scattering")
     group.add_argument("--step-rate", type=argtypes.number(MIN_STEP_RATE, MAX_STEP_RATE), default=None,
                        metavar="RATE",
                        help="biased: Cycles' volume step rate (default: the scene's); auto: the "
@@ -147,11 +147,12 @@ def guided_options_from_args(args):
 
 def guided_render_options(guided, seed: int, resolution):
     """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm): its
-    ceiling as max_spp (what the statistics report), its tile size, the seed and resolution."""
+    ceiling as max_spp (what the statistics report), its tile size, the seed and resolution,
+    and guided's volume estimator (auto)."""
     from ...core.sampling.render_options import RenderOptions
 
     return RenderOptions(max_spp=guided.ceiling, tile_size=guided.tile_size, seed=seed,
-                         resolution=resolution).check()
+                         resolution=resolution, estimator="auto").check()
 
 
 def render_options_from_args(args):
@@ -172,7 +173,17 @@ def render_options_from_args(args):
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
         resolution=parse_resolution(args.resolution), denoise=args.denoise,
-        estimator=getattr(args, "estimator", "scene"), step_rate=getattr(args, "step_rate", None)).check()
+        estimator=estimator_from_args(args), step_rate=getattr(args, "step_rate", None)).check()
+
+
+def estimator_from_args(args) -> str:
+    """--estimator, or its default: auto for guided (a time budget is spent best where the
+    medium's estimate costs least), the scene's own settings for every other mode (the
+    baselines and the paper's modes render what the scene asks for)."""
+    chosen = getattr(args, "estimator", None)
+    if chosen is not None:
+        return chosen
+    return "auto" if getattr(args, "mode", None) == "guided" else "scene"
 
 
 def map_options_from_args(args) -> MapOptions:
