@@ -112,7 +112,7 @@ SETTINGS: tuple[Setting, ...] = (
             32, min=MIN_TILE_SIZE, max=4096, soft_max=256),
     Setting("volume_estimator", "enum", "Volume Estimator",
             "How Cycles estimates the fog and smoke of this render (the scene keeps its own "
-            "settings)", "SCENE", items=ESTIMATOR_ITEMS),
+            "settings)", "AUTO", items=ESTIMATOR_ITEMS),
     Setting("denoise", "bool", "Denoise",
             "Denoise every finished frame (gold and selective alike) with Open Image Denoise, "
             "guided by albedo and normal; the tiles themselves are never denoised one by one",
@@ -175,7 +175,7 @@ def render_options(settings) -> RenderOptions:
     min_spp = 1 if uses_budget(settings) else int(settings.min_spp)
     return RenderOptions(max_spp=int(settings.max_spp), min_spp=min_spp,
                          tile_size=int(settings.tile_size), denoise=bool(settings.denoise),
-                         estimator=str(getattr(settings, "volume_estimator", "SCENE")).lower()).check()
+                         estimator=str(getattr(settings, "volume_estimator", "AUTO")).lower()).check()
 
 
 def guided_options(settings) -> GuidedOptions:

@@ -12,7 +12,8 @@ from ..files import atomic_path
 
 #: Colours and markers per curve (others cycle through matplotlib's defaults).
 STYLES = {"uniform": ("#1f1f1f", "o"), "adaptive": ("#8a5fb0", "s"), "guiding": ("#2a9d8f", "^"),
-          "xs": ("#d9822b", "D"), "xsl": ("#3b6ea5", "v"), "guided": ("#c0392b", "*"), "guided_xsl": ("#e377c2", "P")}
+          "xs": ("#d9822b", "D"), "xsl": ("#3b6ea5", "v"), "guided": ("#c0392b", "*"), "guided_xsl": ("#e377c2", "P"),
+          "auto": ("#1a7f37", "X"), "guided_auto": ("#c0392b", "*")}
 PANELS = (("flip", "mean HDR-FLIP against the reference"), ("mse", "MSE against the reference"))
 
 
@@ -25,7 +26,9 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
         raise InputError("the plot needs matplotlib (install it from requirements.lock)") from None
     figure = Figure(figsize=(12, 5.2), dpi=110)
     axes = figure.subplots(1, 2)
-    palette = iter(["#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#8c564b"])
+    # Enough distinct colours for a step-rate sweep (six curves) beside the named ones.
+    palette = iter(["#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#8c564b", "#9467bd", "#ff7f0e",
+                    "#2ca02c", "#d62728", "#1f77b4"])
     # One style per curve for both panels (the palette is drawn from once per curve).
     styles = {name: STYLES.get(name) or (next(palette, "#444444"), "o") for name in data["curves"]}
     for axis, (metric, title) in zip(axes, PANELS):
