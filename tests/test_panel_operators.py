@@ -113,8 +113,11 @@ def test_preferences_hold_every_default(blender, addon):
 
 
 def test_operators_show_the_command_line_results_and_restore_the_scene(blender, fog):
+    from dataclasses import replace
+
     from xsl_render.addon.cycles.selective_render import render_gold
     from xsl_render.addon.maps.director_maps import compute_maps
+    from xsl_render.addon.maps.estimator_choice import with_estimator_choice
     from xsl_render.addon.panel.image_display import read_pixels
     from xsl_render.addon.scene.state import settings_dump
     from xsl_render.core.sampling.render_options import RenderOptions
@@ -133,7 +136,10 @@ def test_operators_show_the_command_line_results_and_restore_the_scene(blender, 
     # Blender counts rows from the bottom: its first pixel is our last row's first pixel.
     assert images["XSL X map"].pixels[0] == pytest.approx(float(maps.x[-1, 0]), abs=1e-6)
 
-    gold = render_gold(fog, RenderOptions(max_spp=4))
+    # The panel's Volume Estimator (Auto by default) chosen as the command line chooses it.
+    chosen = with_estimator_choice(fog, replace(RenderOptions(max_spp=4),
+                                                estimator=fog.xsl_render.volume_estimator.lower()), 4)
+    gold = render_gold(fog, chosen)
     np.testing.assert_array_equal(read_pixels(images["XSL Gold"]), gold.image)
     render, samples = read_pixels(images["XSL Render"]), read_pixels(images["XSL Samples"])[..., 0]
     assert render.shape == (H, W, 4) and np.isfinite(render).all()
