@@ -87,3 +87,28 @@ def test_guided_render_obeys_its_ceiling_and_restores_the_scene(fog):
     assert outcome.samples.max() <= 8
     assert outcome.stats["wall_s"] < 6.0                    # done when every pixel has its 8
     assert settings_dump(fog) == before
+
+
+def test_guided_render_syncs_heterogeneous_fog_once(blender):
+    """The pilot's scoring denoise sits between two renders of one Cycles session; it used to
+    make Cycles sync the scene again (the octree of a noise fog, seconds) in the first
+    rectangle of the final pass. Now no final rectangle comes near the first sync's cost."""
+    import time
+
+    import xmap_scenes as xs
+
+    scene = xs.base_scene(blender, 32, 18)
+    scene.render.engine = "CYCLES"
+    xs.ground_and_props(blender)
+    xs.add(blender, "primitive_cube_add", xs.noise_fog_material(blender), size=6.0, location=(0.0, 6.0, 1.0))
+    options = RenderOptions(max_spp=16, tile_size=8, estimator="unbiased").check()
+    # A budget of 2.5 syncs leaves the final pass room (the sync alone is measured first).
+    with preserved_scene(scene), CyclesWindowRenderer(scene, 3) as renderer:
+        started = time.perf_counter()
+        renderer.render(None, 1)
+        first_sync = time.perf_counter() - started
+    outcome = render_guided(scene, options, GuidedOptions(time_budget=max(2.0, 2.5 * first_sync),
+                                                          max_spp=16, tile_size=8).check())
+    final = [tile["seconds"] for tile in outcome.stats["tiles"] if tile.get("pass") == "final"]
+    assert final and outcome.stats["phases_s"]["sync"] > 0.3 * first_sync
+    assert max(final) < 0.3 * outcome.stats["phases_s"]["sync"], (final, outcome.stats["phases_s"])
