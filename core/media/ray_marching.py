@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .scene_model import luminance
 from .volume_medium import VolumeMedium
 
 #: ``scene.cycles.volume_max_steps``' default.
@@ -75,7 +76,8 @@ class MarchingError:
     step_rate: float
 
     def luminance(self, values: np.ndarray) -> np.ndarray:
-        return np.asarray(values, np.float64) @ np.array([0.2126, 0.7152, 0.0722])
+        """(n,) luminance of (n, 3) per-channel values (``scene_model.luminance``'s weights)."""
+        return np.asarray(luminance(np.asarray(values, np.float64).T), np.float64)
 
 
 def medium_step(medium: VolumeMedium) -> float:
