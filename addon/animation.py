@@ -42,29 +42,80 @@ class FrameResult:
     maps: MapSet | None = None
 
 
-#: Renders the scene at its current frame, as steps.
-FrameJob = Callable[[object], Steps[FrameResult]]
+@dataclass(frozen=True)
+class FrameJob:
+    """How to render one frame, in two parts so that a frame range keeps one Cycles session.
+
+    ``prepare(scene)`` (optional) is everything that is not the frame's own rendering: its
+    maps, the estimator's choice. The maps render with Cycles too (the snapshot, with the
+    media switched off on temporary copies of their materials), and creating or removing a
+    datablock makes Cycles sync the whole scene again at its next render (3.4 s of
+    heterogeneous fog's octree on balls_b, every frame). ``frames_steps`` therefore prepares
+    up to ``FRAMES_AHEAD`` frames first and then renders them back to back in one session.
+    ``render(scene, prepared)`` renders the frame from what ``prepare`` returned. Both are
+    steps reporting their own progress from 0 to 1; ``share`` is the part of a frame's
+    progress bar given to ``prepare``.
+
+    Calling the job runs both for the scene's current frame (a still).
+    """
+
+    render: Callable[[object, object], Steps[FrameResult]]
+    prepare: Callable[[object], Steps[object]] | None = None
+    share: float = 0.0
+
+    def __call__(self, scene) -> Steps[FrameResult]:
+        prepared = None
+        if self.prepare is not None:
+            prepared = yield from scaled_steps(self.prepare(scene), 0.0, self.share)
+        return (yield from scaled_steps(self.render(scene, prepared), self.share, 1.0))
 
 
-def frames_steps(scene, frames: Sequence[int], render_frame: FrameJob,
-                 on_frame: Callable[[FrameResult], object]) -> Steps[list]:
-    """Render ``frames`` in order; ``on_frame(result)`` (write files, show images) runs as
-    soon as a frame is done, so a cancelled run keeps every finished frame. Returns the list
-    of what ``on_frame`` returned. The scene's frame and settings are restored at the end.
+#: Frames prepared (maps computed) before they are rendered in one go; a frame's maps take
+#: about 15 float32 images, 1 GB for 8 frames at 1920x1080.
+FRAMES_AHEAD = 8
+
+
+def frames_steps(scene, frames: Sequence[int], job: FrameJob,
+                 on_frame: Callable[[FrameResult], object], ahead: int = FRAMES_AHEAD) -> Steps[list]:
+    """Render ``frames`` in order in one Cycles session; ``on_frame(result)`` (write files,
+    show images) runs as soon as a frame is done, so a cancelled run keeps every finished
+    frame. Returns the list of what ``on_frame`` returned. The scene's frame and settings
+    (persistent data among them) are restored at the end.
+
+    Persistent data stays on for the whole range: Cycles then syncs only what changed from
+    one frame to the next (a moving camera, an animated object), not the whole scene. Jobs
+    with a ``prepare`` part have it run for up to ``ahead`` frames before those frames
+    render (see ``FrameJob``): one full sync per ``ahead`` frames instead of one per frame.
 
     Datablocks created inside are removed at the end (``preserved_scene``), so images
     shown by ``on_frame`` must exist before the run starts.
     """
     frames = list(frames)
     done = []
+    count = len(frames)
+    chunk = max(1, ahead) if job.prepare is not None else 1
     with preserved_scene(scene):
-        for index, frame in enumerate(frames):
-            scene.frame_set(frame)
-            result = yield from scaled_steps(render_frame(scene), index / len(frames),
-                                             (index + 1) / len(frames),
-                                             f"frame {frame} ({index + 1}/{len(frames)}): ")
-            done.append(on_frame(result))
+        scene.render.use_persistent_data = True
+        for first in range(0, count, chunk):
+            part = range(first, min(count, first + chunk))
+            prepared = {}
+            if job.prepare is not None:
+                for index in part:
+                    scene.frame_set(frames[index])
+                    prepared[index] = yield from scaled_steps(
+                        job.prepare(scene), index / count, (index + job.share) / count,
+                        _label(frames, index))
+            for index in part:
+                scene.frame_set(frames[index])
+                result = yield from scaled_steps(
+                    job.render(scene, prepared.get(index)), (index + job.share) / count,
+                    (index + 1) / count, _label(frames, index))
+                done.append(on_frame(result))
     return done
+
+
+def _label(frames: Sequence[int], index: int) -> str:
+    return f"frame {frames[index]} ({index + 1}/{len(frames)}): "
 
 
 def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
@@ -72,16 +123,17 @@ def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
     """A frame job for xs / xsl: the frame's maps (rays cached in ``cache_dir``), then the
     selective render driven by the map named ``mode``."""
 
-    def steps(scene) -> Steps[FrameResult]:
-        maps = yield from scaled_steps(map_steps(scene, map_options, size=options.resolution,
-                                                 cache_dir=cache_dir), 0.0, MAP_SHARE, "maps: ")
-        outcome = yield from scaled_steps(
-            selective_steps(scene, maps.director(mode), options, mode, maps.info["seconds"]["total"]),
-            MAP_SHARE, 1.0)
+    def prepare(scene) -> Steps[MapSet]:
+        return (yield from scaled_steps(map_steps(scene, map_options, size=options.resolution,
+                                                  cache_dir=cache_dir), 0.0, 1.0, "maps: "))
+
+    def render(scene, maps: MapSet) -> Steps[FrameResult]:
+        outcome = yield from selective_steps(scene, maps.director(mode), options, mode,
+                                             maps.info["seconds"]["total"])
         outcome.stats["maps"] = maps_summary(maps)
         return FrameResult(scene.frame_current, outcome, maps)
 
-    return steps
+    return FrameJob(render, prepare, MAP_SHARE)
 
 
 def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options: RenderOptions,
@@ -92,18 +144,19 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
     command line, the farm and the panel all render guided frames through this job."""
     guided.check()
 
-    def steps(scene) -> Steps[FrameResult]:
-        importance, map_seconds, start = None, 0.0, 0.0
-        if guided.importance != "none":
-            maps = named_map_steps(scene, guided.importance, map_options, options.resolution, cache_dir)
-            importance, map_seconds = yield from scaled_steps(
-                timed_steps(maps), 0.0, IMPORTANCE_SHARE, f"{guided.importance.upper()} map: ")
-            start = IMPORTANCE_SHARE
-        outcome = yield from scaled_steps(guided_steps(scene, options, guided, importance, map_seconds),
-                                          start, 1.0)
+    def prepare(scene) -> Steps[tuple]:
+        maps = named_map_steps(scene, guided.importance, map_options, options.resolution, cache_dir)
+        return (yield from scaled_steps(timed_steps(maps), 0.0, 1.0,
+                                        f"{guided.importance.upper()} map: "))
+
+    def render(scene, prepared) -> Steps[FrameResult]:
+        importance, map_seconds = prepared if prepared is not None else (None, 0.0)
+        outcome = yield from guided_steps(scene, options, guided, importance, map_seconds)
         return FrameResult(scene.frame_current, outcome)
 
-    return steps
+    if guided.importance == "none":
+        return FrameJob(render)
+    return FrameJob(render, prepare, IMPORTANCE_SHARE)
 
 
 def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: RenderOptions,
@@ -112,32 +165,41 @@ def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: Rend
     (its media may move) before the frame's maps and renders, inside its time."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return make_job(options)
+    share = make_job(options).share
 
-    def steps(scene) -> Steps[FrameResult]:
-        chosen = with_estimator_choice(scene, options, spp)
-        return (yield from make_job(chosen)(scene))
+    def prepare(scene) -> Steps[tuple]:
+        yield 0.0, "choosing the volume estimator"
+        job = make_job(with_estimator_choice(scene, options, spp))
+        inner = None
+        if job.prepare is not None:
+            inner = yield from job.prepare(scene)
+        return job, inner
 
-    return steps
+    def render(scene, prepared) -> Steps[FrameResult]:
+        job, inner = prepared
+        return (yield from job.render(scene, inner))
+
+    return FrameJob(render, prepare, share)
 
 
 def single_render_frame(render: Callable[[object], RenderOutcome], label: str) -> FrameJob:
     """A frame job for one ordinary render (gold, uniform, adaptive): ``render(scene)``."""
 
-    def steps(scene) -> Steps[FrameResult]:
+    def steps(scene, _prepared=None) -> Steps[FrameResult]:
         yield 0.0, f"{label}: rendering"
         return FrameResult(scene.frame_current, render(scene))
 
-    return steps
+    return FrameJob(steps)
 
 
 def stepped_render_frame(render_steps: Callable[[object], Steps[RenderOutcome]]) -> FrameJob:
     """A frame job from a render written as steps (e.g. the banded gold render)."""
 
-    def steps(scene) -> Steps[FrameResult]:
+    def steps(scene, _prepared=None) -> Steps[FrameResult]:
         outcome = yield from render_steps(scene)
         return FrameResult(scene.frame_current, outcome)
 
-    return steps
+    return FrameJob(steps)
 
 
 def maps_summary(maps: MapSet) -> dict:

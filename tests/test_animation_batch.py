@@ -137,3 +137,27 @@ def test_batch_arguments_follow_the_separator(addon, foggy_animation, capfd, mon
     assert addon.batch() == 0
     info = json.loads(capfd.readouterr().out)
     assert info["scene"] == "Scene" and info["frames"]["end"] == 3
+
+
+@pytest.mark.parametrize("mode, budget", [("uniform", ["--spp", "2"]), ("xsl", []),
+                                          ("guided", ["--time-budget", "1.5", "--estimator", "unbiased"])])
+def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget, tmp_path):
+    """One Cycles session for the frame range: balls_b's noise fog makes Cycles build its
+    volume octree at every full sync (seconds); with a moving camera, frames 2 and 3 sync
+    only the camera. Cycles' own synchronization time (EXR header) says so."""
+    blender.ops.wm.open_mainfile(filepath=str(EXAMPLES / "balls_b.blend"))
+    scene = blender.context.scene
+    camera = scene.camera
+    for frame in (1, 3):
+        camera.location.x += 0.1 * frame
+        camera.keyframe_insert("location", frame=frame)
+    out = tmp_path / "out"
+    assert addon.batch(["render", "--mode", mode, "--max-spp", "4", "--resolution", "32x24",
+                        "--tile-size", "16", *budget, "--frames", "1-3", "--quiet",
+                        "--out", str(out / "f_####.exr"), "--stats", str(out / "stats.json")]) == 0
+    frames = json.loads((out / "stats.json").read_text())["frames"]
+    synced = [frame["cycles_sync_s"] for frame in frames]
+    assert synced[0] > 0.3 and synced[1] + synced[2] < 0.1 * synced[0], synced
+    images = [read_image(frame["out"]) for frame in frames]
+    assert not np.array_equal(images[0], images[2])                  # the camera moved
+    assert scene.render.use_persistent_data is False                 # the file's own setting

@@ -60,6 +60,7 @@ def gold_band_steps(scene, options: RenderOptions, budget: int = BAND_PIXEL_SAMP
         image, samples = compositor.result()
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
         stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings)
+    stats["cycles_sync_s"] = renderer.sync_seconds
     stats["bands"] = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,
                       "note": "bit-identical to one full-frame render; the wall time includes "
                               "the margin rows"}

@@ -196,7 +196,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                  pilot_seconds=pilot.seconds, pilot_resolution_divisor=reduce,
                  seconds_per_pixel_sample=rate,
                  final_pass=final.to_dict(),
-                 denoise_reserved_s=denoise_reserve)
+                 denoise_reserved_s=denoise_reserve, cycles_sync_s=renderer.sync_seconds)
     if stats["wall_s"] > 1.1 * budget:
         note = (f"the render took {stats['wall_s']:.2f} s of a {budget:g} s budget "
                 f"(scene sync {phases['sync']:.2f} s, pilot {phases['pilot']:.2f} s at {have} spp)")

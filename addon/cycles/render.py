@@ -77,6 +77,16 @@ def render_passes(scene, passes: tuple[str, ...] = ("Combined",), view_layer=Non
         shutil.rmtree(folder, ignore_errors=True)
 
 
+def header_seconds(text) -> float:
+    """Seconds of a duration as Blender writes it in an EXR header ("00:10.68", "01:02:03.5").
+
+    Cycles records its render statistics this way (``cycles.<layer>.synchronization_time``)."""
+    seconds = 0.0
+    for part in str(text).strip().split(":"):
+        seconds = seconds * 60.0 + float(part)
+    return seconds
+
+
 def read_exr_parts(path: str | os.PathLike, small: bool = False) -> tuple[dict[str, np.ndarray], dict[str, object]]:
     """Every channel of every part of an EXR by name, and the first part's header attributes.
 

@@ -213,6 +213,7 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         phases["composite"] = composite_s + time.perf_counter() - started
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
         stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
+    stats["cycles_sync_s"] = renderer.sync_seconds
     stats["plan"] = plan.to_dict()
     stats["ideal_speedup"] = plan.ideal_speedup
     stats["director_map_mean"] = float(data.mean())
@@ -255,6 +256,7 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
+    stats["cycles_sync_s"] = renderer.sync_seconds
     stats.update(extra or {})
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not

@@ -42,7 +42,7 @@ import numpy as np
 from ...core.camera import border_for_window
 from ...core.errors import InputError
 from ..scene.probe import render_size
-from .render import ensure_cycles, passes_from_channels, read_exr_parts
+from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
 
@@ -59,6 +59,7 @@ class RenderedWindow:
     samples_reported: int | None                 # the count in the EXR header Cycles wrote
     seconds: float                               # wall time of the render call
     guides: np.ndarray | None = None             # (h, w, 6) denoising albedo RGB + normal XYZ
+    sync_seconds: float = 0.0                    # Cycles' own scene synchronization time
 
 
 def render_layer(scene):
@@ -113,6 +114,9 @@ class CyclesWindowRenderer:
         self._status_max = 0
         self._on_sample: Callable[[int, int], None] | None = None
         self._handler = self._render_status
+        #: Seconds Cycles reported syncing the scene, over every render so far: near 0 once
+        #: the scene is synced (persistent data), seconds where it syncs again.
+        self.sync_seconds = 0.0
 
     # -- context manager -------------------------------------------------------------------
     def __enter__(self) -> "CyclesWindowRenderer":
@@ -243,11 +247,15 @@ class CyclesWindowRenderer:
                                f"for a {shape[1]}x{shape[0]} window {window}")
         reported = attributes.get(f"cycles.{self.layer.name}.samples")
         reported = None if reported is None else int(reported)
+        synced = attributes.get(f"cycles.{self.layer.name}.synchronization_time")
+        synced = 0.0 if synced is None else header_seconds(synced)
+        self.sync_seconds += synced
         if reported is not None and reported != samples:
             raise RuntimeError(f"Cycles rendered with {reported} samples where {samples} were set")
         if counted:
             rendered = self._status_max or samples
             # The pass holds each pixel's samples divided by the samples the render completed.
             per_pixel = np.rint(passes["Debug Sample Count"][:, :, 0] * rendered).astype(np.float32)
-            return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds, guides)
-        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds, guides)
+            return RenderedWindow(window, pixels, per_pixel, samples, rendered, reported, seconds, guides,
+                                  synced)
+        return RenderedWindow(window, pixels, samples, samples, samples, reported, seconds, guides, synced)
