@@ -1,6 +1,6 @@
 """Build the example scenes and save them as .blend files next to this script.
 
-    python build_scenes.py                  # all four scenes
+    python build_scenes.py                  # all five scenes
     python build_scenes.py road statue      # only these
     python build_scenes.py --out DIR road   # write DIR/road.blend instead
 
@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-SCENES = ("balls_a", "balls_b", "statue", "road")
+SCENES = ("balls_a", "balls_b", "statue", "road", "street")
 
 
 def build_scene(name: str, out_dir: Path = HERE) -> Path:

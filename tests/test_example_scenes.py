@@ -1,5 +1,6 @@
 """The example scenes: the build is deterministic, the committed .blend files are what the
-scripts build, each renders in Cycles, and scene probing finds what each scene is for."""
+scripts build, each renders in Cycles, and scene probing finds what each scene is for (the
+street's: only its camera moves)."""
 from __future__ import annotations
 
 import importlib.util
@@ -13,7 +14,11 @@ import pytest
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "example_blends"
 
-SCENES = ("balls_a", "balls_b", "statue", "road")
+SCENES = ("balls_a", "balls_b", "statue", "road", "street")
+#: Each scene's render size: the paper's four at 512 px on the largest side, the animated
+#: street smaller (24 frames).
+SIZES = {"balls_a": (512, 384), "balls_b": (512, 384), "statue": (384, 512), "road": (512, 288),
+         "street": (256, 144)}
 
 pytestmark = pytest.mark.blender
 
@@ -77,6 +82,22 @@ def node_tree_summary(tree) -> dict | None:
     return {"nodes": nodes, "links": links, "interface": interface}
 
 
+def animation_summary(idtype) -> dict | None:
+    """The keyframes of a datablock's action (its slot's channels), or None without one."""
+    data = getattr(idtype, "animation_data", None)
+    if data is None or data.action is None:
+        return None
+    from bpy_extras.anim_utils import action_get_channelbag_for_slot
+
+    channels = action_get_channelbag_for_slot(data.action, data.action_slot)
+    curves = [] if channels is None else channels.fcurves
+    return {"action": data.action.name, "curves": sorted(
+        (c.data_path, c.array_index, c.extrapolation,
+         _plain([(tuple(k.co), k.interpolation, tuple(k.handle_left), tuple(k.handle_right))
+                 for k in c.keyframe_points]))
+        for c in curves)}
+
+
 def mesh_fingerprint(mesh) -> dict:
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float64)
     mesh.vertices.foreach_get("co", co)
@@ -100,7 +121,7 @@ def scene_summary(bpy) -> dict:
                                 "node_group": getattr(getattr(m, "node_group", None), "name", None)}
                                for m in ob.modifiers],
                  "slots": [s.material.name if s.material else None for s in ob.material_slots],
-                 "in_scene": ob.name in scene.objects}
+                 "in_scene": ob.name in scene.objects, "animation": animation_summary(ob)}
         if ob.type == "MESH":
             entry["mesh"] = mesh_fingerprint(ob.data)
             entry["evaluated_faces"] = len(ob.evaluated_get(depsgraph).data.polygons)
@@ -114,7 +135,8 @@ def scene_summary(bpy) -> dict:
             entry["grids"] = [(g.name, g.data_type) for g in evaluated.grids]
             entry["evaluated_materials"] = [m.name if m else None for m in evaluated.materials]
         objects[ob.name] = entry
-    materials = {m.name: {"cycles": rna_values(m.cycles), "tree": node_tree_summary(m.node_tree)}
+    materials = {m.name: {"cycles": rna_values(m.cycles), "tree": node_tree_summary(m.node_tree),
+                          "animation": animation_summary(m)}
                  for m in bpy.data.materials}
     groups = {g.name: node_tree_summary(g) for g in bpy.data.node_groups}
     world = scene.world
@@ -129,7 +151,7 @@ def scene_summary(bpy) -> dict:
         "objects": objects, "materials": materials, "node_groups": groups,
         "counts": {kind: len(getattr(bpy.data, kind)) for kind in
                    ("objects", "meshes", "lights", "cameras", "volumes", "materials",
-                    "node_groups", "worlds", "images", "textures", "scenes")},
+                    "node_groups", "worlds", "images", "textures", "scenes", "actions")},
     }
 
 
@@ -195,7 +217,7 @@ def test_committed_blend_is_small_and_set_up_for_the_paper(name):
     scene = bpy.context.scene
     r, c = scene.render, scene.cycles
     assert r.engine == "CYCLES" and c.device == "CPU"
-    assert max(r.resolution_x, r.resolution_y) == 512 and r.resolution_percentage == 100
+    assert (r.resolution_x, r.resolution_y) == SIZES[name] and r.resolution_percentage == 100
     assert scene.camera.data.type == "PERSP"
     assert c.samples == 64 and not c.use_adaptive_sampling and not c.use_denoising
     assert c.volume_bounces in (0, 1) and c.max_bounces <= 8
@@ -275,3 +297,47 @@ def test_info_lists_the_road_fog_headlights_lamps_and_camera(cli):
     assert lamps == [f"Lamp.{i}" for i in range(1, 7)]
     assert all(f"{lamp}.Bulb" in lights for lamp in lamps)
     assert info["lights_out_of_frame"] == []
+
+
+def test_info_lists_the_street_fog_lamps_and_frames(cli):
+    result = cli("info", EXAMPLES / "street.blend", "--json")
+    assert result.returncode == 0, result.stderr
+    info = json.loads(result.stdout)
+    (fog,) = info["media"]
+    assert fog["name"] == "Fog" and fog["kind"] == "mesh" and not fog["homogeneous"]
+    lights = {light["name"]: light for light in info["lights"]}
+    lamps = sorted(n for n, light in lights.items() if n.startswith("Lamp.") and light["kind"] == "POINT")
+    assert lamps == [f"Lamp.{i}" for i in range(1, 5)]
+    assert all(f"{lamp}.Bulb" in lights for lamp in lamps)
+
+
+def test_street_moves_only_its_camera_through_static_fog():
+    """24 frames at 24 fps; the camera dollies about 5 m and pans, staying inside the fog box;
+    nothing else is animated (the fog stays still, so persistent data can keep it)."""
+    import bpy
+
+    bpy.ops.wm.open_mainfile(filepath=str(EXAMPLES / "street.blend"), load_ui=False)
+    scene = bpy.context.scene
+    assert (scene.frame_start, scene.frame_end, scene.render.fps, scene.render.fps_base) == (1, 24, 24, 1.0)
+    animated = [ob.name for ob in bpy.data.objects if animation_summary(ob)]
+    animated += [m.name for m in bpy.data.materials if animation_summary(m)]
+    animated += [w.name for w in bpy.data.worlds if animation_summary(w)]
+    animated += [d.name for d in (*bpy.data.lights, *bpy.data.cameras, *bpy.data.meshes)
+                 if animation_summary(d)]
+    assert animated == ["Camera"]
+    camera, fog = scene.camera, bpy.data.objects["Fog"]
+    corners = [fog.matrix_world @ v.co for v in fog.data.vertices]
+    low = [min(c[i] for c in corners) for i in range(3)]
+    high = [max(c[i] for c in corners) for i in range(3)]
+    assert low[2] < 0.0 < 0.5 < high[2]              # resting on the ground
+    poses = []
+    for frame in (1, 12, 24):
+        scene.frame_set(frame)
+        location = camera.matrix_world.translation.copy()
+        assert all(lo < x < hi for lo, x, hi in zip(low, location, high)), (frame, location)
+        poses.append((location, camera.matrix_world.to_quaternion()))
+    scene.frame_set(1)
+    dolly = (poses[2][0] - poses[0][0]).length
+    pan = math.degrees(poses[0][1].rotation_difference(poses[2][1]).angle)
+    assert 4.0 < dolly < 6.0 and 1.0 < pan < 10.0, (dolly, pan)
+    assert (poses[1][0] - poses[0][0]).length == pytest.approx(dolly * 11 / 23, rel=1e-3)   # linear
