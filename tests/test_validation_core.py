@@ -7,7 +7,8 @@ import pytest
 
 from xsl_render.core.errors import InputError
 from xsl_render.core.maps.options import MapOptions
-from xsl_render.core.validation.example_scenes import EXAMPLE_SCENES, resolve_scenes
+from xsl_render.core.validation.example_scenes import (ANIMATED_EXAMPLES, EXAMPLE_SCENES,
+                                                      example_scene_path, resolve_scenes)
 from xsl_render.core.validation.plan import (DEFAULT_VARIANTS, VARIANTS, map_seconds, maps_needed,
                                              parse_variants, scaled_size, scene_variants)
 from xsl_render.core.validation.report_chart import Bar, timing_chart_svg
@@ -128,3 +129,9 @@ def test_resolve_scenes(tmp_path):
         with pytest.raises(InputError, match=message):
             resolve_scenes(text)
     assert EXAMPLE_SCENES == ("balls_a", "balls_b", "statue", "road")
+    # The animation is taken by name, never by default.
+    assert ANIMATED_EXAMPLES == ("street",)
+    assert resolve_scenes("street,road") == [("street", example_scene_path("street")),
+                                             ("road", example_scene_path("road"))]
+    assert example_scene_path("street").name == "street.blend"
+    assert [name for name, _ in resolve_scenes(None)] == list(EXAMPLE_SCENES)

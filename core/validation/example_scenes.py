@@ -1,5 +1,12 @@
-"""The bundled example scenes (the paper's four: balls A, balls B, a statue for Lucy, road) and
-how a command names scenes: an example's name, or the path of any .blend file."""
+"""The bundled example scenes (the paper's four: balls A, balls B, a statue for Lucy, road; and
+one animation, street) and how a command names scenes: an example's name, or the path of any
+.blend file.
+
+``EXAMPLE_SCENES`` are the paper's four: what ``experiment`` runs by default, one frame each.
+``ANIMATED_EXAMPLES`` (street, 24 frames) is named like them but never part of a default:
+a fifth scene would add its 1024-spp reference and every run to the default experiment,
+which renders one frame of a scene and so would not use the animation anyway.
+"""
 from __future__ import annotations
 
 import os
@@ -10,6 +17,7 @@ from ..checks import name_list
 from ..errors import InputError
 
 EXAMPLE_SCENES = ("balls_a", "balls_b", "statue", "road")
+ANIMATED_EXAMPLES = ("street",)
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*\Z")
 
 
@@ -32,7 +40,8 @@ def example_scene_path(name: str) -> Path:
 
 
 def resolve_scenes(text: str | None) -> list[tuple[str, Path]]:
-    """'balls_a,road' or 'scene.blend,...' -> [(name, path)]; None means all four examples.
+    """'balls_a,road' or 'scene.blend,...' -> [(name, path)]; None means the paper's four
+    examples (``EXAMPLE_SCENES``); the animated ones are taken by name.
 
     A name is reported as is; a path under its file stem. Names must be unique, because each
     scene gets a folder of that name.
@@ -45,10 +54,11 @@ def resolve_scenes(text: str | None) -> list[tuple[str, Path]]:
             if not path.is_file():
                 raise InputError(f"no such scene file: {item}")
             name = path.stem
-        elif item in EXAMPLE_SCENES:
+        elif item in EXAMPLE_SCENES + ANIMATED_EXAMPLES:
             name, path = item, example_scene_path(item)
         else:
-            raise InputError(f"unknown scene '{item}' (examples: {', '.join(EXAMPLE_SCENES)}; "
+            raise InputError(f"unknown scene '{item}' (examples: "
+                             f"{', '.join(EXAMPLE_SCENES + ANIMATED_EXAMPLES)}; "
                              "or give the path of a .blend file)")
         if not _NAME.match(name):
             raise InputError(f"scene name '{name}' must be letters, digits, '_' or '-' (it names a folder)")

@@ -24,8 +24,9 @@ def add_arguments(parser) -> None:
     from . import argtypes
 
     parser.add_argument("--scenes", metavar="LIST",
-                        help="comma-separated example names (balls_a, balls_b, statue, road) or "
-                             ".blend paths (default: the four examples)")
+                        help="comma-separated example names (balls_a, balls_b, statue, road; "
+                             "street, the animation, renders its current frame) or "
+                             ".blend paths (default: the paper's four examples)")
     parser.add_argument("--out", default="xsl-experiment", metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished work in it is reused (default xsl-experiment)")
     add_run_arguments(parser)
