@@ -162,14 +162,19 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: RenderOptions,
                     spp: float) -> FrameJob:
     """The frame job ``make_job(options)`` with ``--estimator auto`` chosen for each frame
-    (its media may move) before the frame's maps and renders, inside its time."""
+    (its media may move) before the frame's maps and renders, inside its time. Each frame's
+    choice starts from the frame before's (hysteresis: ``choose_step_rate``), so the step,
+    and the bias with it, does not switch back and forth over a sequence."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return make_job(options)
     share = make_job(options).share
+    previous = []
 
     def prepare(scene) -> Steps[tuple]:
         yield 0.0, "choosing the volume estimator"
-        job = make_job(with_estimator_choice(scene, options, spp))
+        chosen = with_estimator_choice(scene, options, spp, previous[-1] if previous else None)
+        previous[:] = [chosen.estimator_choice]
+        job = make_job(chosen)
         inner = None
         if job.prepare is not None:
             inner = yield from job.prepare(scene)

@@ -133,6 +133,22 @@ def test_auto_takes_the_largest_rate_within_the_noise():
     assert set(never.to_dict()["tried"]) == {"4", "2", "1", "0.5", "0.25"}
 
 
+@pytest.mark.parametrize("measure_2, previous, expected", [
+    (0.011, None, 2.0),                 # a first frame: rate 2 is within 0.0125
+    (0.011, (True, 1.0), 1.0),          # after rate 1: 2 must pass 0.7 x 0.0125, it does not
+    (0.008, (True, 1.0), 2.0),          # ... and now it does
+    (0.011, (True, 2.0), 2.0),          # the previous rate itself needs only the tolerance
+    (0.013, (True, 2.0), 1.0),          # it fails: the finer rate at once
+    (0.011, (False, None), 1.0),        # after null scattering every rate is coarser
+])
+def test_auto_keeps_the_previous_frames_rate_unless_clearly_wrong(measure_2, previous, expected):
+    from xsl_render.core.sampling.volume_estimator import EstimatorChoice
+
+    measures = {4.0: 0.30, 2.0: measure_2, 1.0: 0.005, 0.5: 0.004, 0.25: 0.001}
+    before = None if previous is None else EstimatorChoice("auto", biased=previous[0], step_rate=previous[1])
+    assert choose_step_rate(measures.get, spp=16, previous=before).step_rate == expected
+
+
 def test_visible_bias_is_relative_to_what_the_transmittance_can_move():
     t = np.array([0.5, 0.9, 0.01])
     bias = np.array([0.01, 0.01, 0.001])

@@ -26,11 +26,14 @@ from .zbuffer import cast_camera_rays
 PREDICTION_PIXELS = 600
 
 
-def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoice:
+def choose_estimator(scene, options: RenderOptions, spp: float,
+                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
     """The volume estimator a run of ``spp`` samples per pixel renders with.
 
     ``options.estimator`` other than auto is taken as given; auto predicts (module notes),
-    never trying a step rate above ``options.step_rate`` when one is given.
+    never trying a step rate above ``options.step_rate`` when one is given, and keeping
+    ``previous`` (the frame before's choice) unless the prediction clearly says otherwise
+    (``choose_step_rate``).
     """
     if options.estimator != "auto":
         return fixed_choice(options.estimator, options.step_rate)
@@ -64,7 +67,7 @@ def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoi
             error = predictor.error(rate)
             return visible_bias(error.luminance(error.transmittance), error.luminance(error.bias))
 
-        choice = choose_step_rate(measure, spp, largest=options.step_rate)
+        choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
     return replace(choice, seconds=time.perf_counter() - started)
 
 
@@ -88,9 +91,10 @@ def estimator_spp(mode: str, options: RenderOptions, budget: dict | None = None)
     return float(options.max_spp)
 
 
-def with_estimator_choice(scene, options: RenderOptions, spp: float) -> RenderOptions:
+def with_estimator_choice(scene, options: RenderOptions, spp: float,
+                          previous: EstimatorChoice | None = None) -> RenderOptions:
     """``options`` with auto's choice for the scene at its current frame (unchanged for the
-    other estimators, or when chosen already)."""
+    other estimators, or when chosen already); ``previous``: the frame before's choice."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return options
-    return replace(options, estimator_choice=choose_estimator(scene, options, spp))
+    return replace(options, estimator_choice=choose_estimator(scene, options, spp, previous))

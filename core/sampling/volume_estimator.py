@@ -41,6 +41,9 @@ CANDIDATE_RATES = (4.0, 2.0, 1.0, 0.5, 0.25)
 #: Relative pixel error the noise of one sample per pixel leaves (after denoising), see the
 #: module notes.
 NOISE_AT_ONE_SPP = 0.05
+#: Share of the tolerance a step rate coarser than the previous frame's must stay within
+#: (hysteresis, see ``choose_step_rate``).
+SWITCH_MARGIN = 0.7
 #: Transmittances closer to 0 or 1 than this do not make the relative bias explode.
 _FLOOR = 0.05
 #: Cycles' step rate range (``scene.cycles.volume_step_rate``).
@@ -123,23 +126,36 @@ def fixed_choice(estimator: str, step_rate: float | None) -> EstimatorChoice:
 
 
 def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
-                     largest: float | None = None) -> EstimatorChoice:
+                     largest: float | None = None,
+                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
     """``auto``: the largest rate whose visible bias ``measure_at(rate)`` is within the
     tolerance of ``spp`` samples per pixel, else null scattering.
 
     ``measure_at`` is called from the largest rate down and stops at the first that passes
     (the small rates cost the most to predict). ``largest`` caps the rates tried (a step
     rate given with ``auto``).
+
+    ``previous``: the choice made for the frame before (an animation). A rate coarser than
+    that one must pass ``SWITCH_MARGIN`` times the tolerance, so that a measure wavering
+    around the tolerance does not switch the step, and with it the bias, from frame to frame
+    (a static part of the frame would flicker); a finer rate is taken as soon as the
+    previous one fails.
     """
     tolerance = tolerated_bias(spp)
     tried: dict = {}
+    sticky = previous is not None and previous.estimator == "auto" and previous.biased is not None
     for rate in sorted((r for r in rates if largest is None or r <= largest), reverse=True):
         tried[rate] = measure_at(rate)
-        if tried[rate] <= tolerance:
+        coarser = sticky and (not previous.biased
+                              or (previous.step_rate is not None and rate > previous.step_rate))
+        allowed = tolerance * (SWITCH_MARGIN if coarser else 1.0)
+        if tried[rate] <= allowed:
+            kept = " (the previous frame's)" if sticky and previous.biased \
+                and previous.step_rate == rate else ""
             return EstimatorChoice("auto", biased=True, step_rate=rate, predicted_bias=tried[rate],
                                    tolerance=tolerance, tried=tried,
-                                   reason=f"predicted bias {tried[rate]:.2%} <= {tolerance:.2%} "
-                                          f"at {spp:g} spp")
+                                   reason=f"predicted bias {tried[rate]:.2%} <= {allowed:.2%} "
+                                          f"at {spp:g} spp{kept}")
     return EstimatorChoice("auto", biased=False, tolerance=tolerance, tried=tried,
                            reason=f"every step rate's predicted bias is above {tolerance:.2%} "
                                   f"at {spp:g} spp")
