@@ -58,7 +58,8 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
                              spp_scale(args, options, result.outcome), options.seed)
         if save_maps is not None and result.maps is not None:
             write_map_set(maps_folder(save_maps, result.frame), result.maps)
-        print(f"frame {result.frame}: " + summary_line(args.mode, stats, path), flush=True)
+        print(f"frame {result.frame}: " + summary_line(args.mode, stats, path)
+              + f" (Cycles synced the scene in {stats.get('cycles_sync_s', 0.0):.2f} s)", flush=True)
         return stats
 
     started = time.perf_counter()
@@ -78,7 +79,8 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
             "frames": done, "frame_range": frame_expression(args.frames),
             "wall_s": time.perf_counter() - started,
             "total_samples": sum(stats["total_samples"] for stats in done),
-            "ray_cache_hits": sum(hits)})
+            "ray_cache_hits": sum(hits),
+            "cycles_sync_s": sum(stats.get("cycles_sync_s", 0.0) for stats in done)})
     if hits:
         print(f"{len(done)} frames; camera rays cast {hits.count(False)} time(s), reused "
               f"{hits.count(True)} time(s)")
