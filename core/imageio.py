@@ -69,12 +69,20 @@ def image_attributes(path: str | os.PathLike) -> dict[str, object]:
 def image_is_float(path: str | os.PathLike) -> bool:
     """True when the file stores floating-point pixels (OpenEXR, float TIFF, Radiance HDR):
     by convention scene-linear, where 8- and 16-bit integer files are display-referred."""
+    return image_header(path)[3]
+
+
+def image_header(path: str | os.PathLike) -> tuple[int, int, int, bool]:
+    """``(width, height, channels, floating-point pixels)`` of an image file, read from its
+    header alone (no pixels): enough to check a sequence's frames before any work."""
     image = oiio.ImageInput.open(str(path))
     if image is None:
         reason = oiio.geterror().strip().splitlines()
         raise InputError(f"cannot read image {path}: {reason[0] if reason else 'unknown format'}")
     try:
-        return image.spec().format.basetype in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE)
+        spec = image.spec()
+        return (int(spec.width), int(spec.height), int(spec.nchannels),
+                spec.format.basetype in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE))
     finally:
         image.close()
 
