@@ -107,3 +107,50 @@ def vdp_metric(reference_display: np.ndarray, test_display: np.ndarray) -> Metri
              "error_jod_drop": jod_drop_at(VDP_ERROR_PROBABILITY),
              "cvvdp_version": version("cvvdp"), "seconds": time.perf_counter() - start}
     return MetricResult.from_map("vdp", probability, VDP_ERROR_PROBABILITY, extra=extra)
+
+
+@functools.cache
+def _video_metric():
+    pycvvdp, torch = _load_cvvdp()
+    return pycvvdp.cvvdp(display_name=VDP_DISPLAY, heatmap=None,
+                         device=torch.device("cpu"), quiet=True)
+
+
+def vdp_video(reference_frames: np.ndarray, test_frames: np.ndarray, fps: float) -> dict:
+    """ColorVideoVDP's JOD of a whole sequence seen as a video at ``fps`` frames a second.
+
+    Parameters
+    ----------
+    reference_frames, test_frames
+        ``(F, H, W, 3)`` display-encoded sRGB frames in [0, 1] (float16 or float32), in the
+        order they are shown; the same display model as :func:`vdp_metric`.
+    fps
+        Frames per second. One frame is no video: it is scored as an image.
+
+    Returns
+    -------
+    dict
+        ``jod`` (10: no visible difference), ``fps``, ``frames``, ``as_video``, the display
+        model, its pixels per degree, the cvvdp version and ``seconds``; or ``jod`` None and
+        ``skipped`` saying why (ColorVideoVDP missing, or refusing the frames). Never a zero.
+    """
+    reason = vdp_unavailable_reason()
+    if reason:
+        return {"jod": None, "skipped": reason}
+    start = time.perf_counter()
+    _, torch = _load_cvvdp()
+    metric = _video_metric()
+    count = int(reference_frames.shape[0])
+    as_video = count > 1
+    try:
+        with torch.no_grad():
+            jod, _ = metric.predict(np.ascontiguousarray(test_frames), np.ascontiguousarray(reference_frames),
+                                    dim_order="FHWC", frames_per_second=float(fps) if as_video else 0)
+    except (RuntimeError, ValueError) as error:     # e.g. frames too small for its pyramid
+        message = str(error).strip().splitlines()
+        return {"jod": None, "skipped": f"ColorVideoVDP failed: {message[0] if message else type(error).__name__}"}
+    if not np.isfinite(float(jod)):
+        return {"jod": None, "skipped": "ColorVideoVDP returned NaN or Inf for these frames"}
+    return {"jod": float(jod), "fps": float(fps), "frames": count, "as_video": as_video,
+            "display": VDP_DISPLAY, "ppd": float(metric.pix_per_deg), "cvvdp_version": version("cvvdp"),
+            "seconds": time.perf_counter() - start, "skipped": None}
