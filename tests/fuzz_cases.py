@@ -190,7 +190,10 @@ CASES = [
      "is a folder"),
     # -- compare ---------------------------------------------------------------------------
     ("compare-ref-missing", ["compare", "{missing}.exr", "{exr}"], "no such image file"),
-    ("compare-test-folder", ["compare", "{exr}", "{dir}"], "is a folder, not a file"),
+    ("compare-test-folder", ["compare", "{exr}", "{dir}"], "TEST is a sequence of frames and REF one image"),
+    ("compare-empty-folders", ["compare", "{dir}", "{dir}"], "holds no .exr frames"),
+    ("compare-pattern-no-folder", ["compare", "{ws}/nowhere/f_####.exr", "{dir}"], "no such folder"),
+    ("compare-frames-of-images", ["compare", "{exr}", "{exr}", "--frames", "1-3"], "--frames is for sequences"),
     ("compare-garbage", ["compare", "{garbage}", "{exr}"], "cannot read image"),
     ("compare-hdr-ldr", ["compare", "{exr}", "{png}"], "same kind"),
     ("compare-sizes", ["compare", "{exr}", "{small}"], "differ in size"),

@@ -90,6 +90,17 @@ def input_folder(what: str = "folder"):
                       keep_text=True)
 
 
+def image_or_frames(what: str = "image file"):
+    """An image file we may read, or frames: a folder we may list, or a pattern such as
+    ``out/frame_####.exr`` whose folder exists. The files read are named by the command's
+    ``files(args)`` (every frame of a sequence), so the type declares none itself."""
+    def check(text: str) -> None:
+        from ...core.validation.frame_sequence import check_images_or_sequence
+
+        check_images_or_sequence(text, what=what)
+    return _converter(check, "file or frames", keep_text=True)
+
+
 def output_file(*suffixes: str):
     """A file of one of ``suffixes`` that may be written (its folder is made if need be)."""
     return _converter(lambda text: checks.writable_file(text, suffixes), "file", keep_text=True,
