@@ -199,6 +199,56 @@ def test_cli_renders_then_copies_from_the_cache(fog_blend, tmp_path, reference_c
 
 @pytest.mark.blender
 @pytest.mark.render
+def test_references_of_frames_keep_the_finished_ones_when_cancelled(fog_blend, tmp_path):
+    """Frame by frame in one session: a cancel before frame 2 keeps frame 1's entry, writes
+    none for frame 2, and leaves the scene's frame and persistent data as they were."""
+    from xsl_render.addon.scene.blend_session import open_blend
+    from xsl_render.addon.validation import reference as ref
+
+    environ = {"XSL_RENDER_CACHE": str(tmp_path)}
+    scene = open_blend(fog_blend)
+    frame, persistent = scene.frame_current, scene.render.use_persistent_data
+    inputs = [ref.reference_inputs(scene, fog_blend, spp=2, frame=f) for f in (1, 2)]
+    finished = []
+
+    def progress(fraction, message):
+        return message.startswith("frame 2")
+    with pytest.raises(Cancelled):
+        ref.ensure_references(scene, inputs, progress=progress, environ=environ, on_frame=finished.append)
+    assert [r.inputs.frame for r in finished] == [1] and finished[0].source == "rendered"
+    assert find_reference(inputs[0].key, environ) is not None
+    assert find_reference(inputs[1].key, environ) is None
+    assert (scene.frame_current, scene.render.use_persistent_data) == (frame, persistent)
+    done = ref.ensure_references(scene, inputs, environ=environ)
+    assert [r.source for r in done] == ["cache", "rendered"]
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_cli_frames_of_the_street_each_cached(tmp_path):
+    """reference --frames on the moving example: one file per frame, different frames (the
+    camera moves), the same entries a single --frame finds; a second call renders nothing."""
+    street = EXAMPLES / "street.blend"
+    args = ("reference", street, "--resolution", "32x18", "--spp", "4", "--quiet")
+    first = xsl_render_cli(*args, "--frames", "1-2", "--out", tmp_path / "a" / "frame_####.exr")
+    assert first.returncode == 0, first.stderr
+    lines = first.stdout.strip().splitlines()
+    assert lines[0].startswith("reference: rendered 32x18, 4 spp, seed 7, frame 1 in ")
+    assert lines[1].startswith("reference: rendered 32x18, 4 spp, seed 7, frame 2 in ")
+    assert lines[-1] == "reference: 2 frames, 2 rendered, 0 from the cache"
+    one, two = (read_image(tmp_path / "a" / f"frame_000{f}.exr") for f in (1, 2))
+    assert one.shape == two.shape == (18, 32, 4) and not np.array_equal(one, two)
+    again = xsl_render_cli(*args, "--frames", "1-2", "--out", tmp_path / "b" / "ref.exr")
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.strip().splitlines()[-1] == "reference: 2 frames, 0 rendered, 2 from the cache"
+    assert np.array_equal(read_image(tmp_path / "b" / "ref0002.exr"), two)
+    single = xsl_render_cli(*args, "--frame", "2", "--out", tmp_path / "c.exr")
+    assert single.returncode == 0, single.stderr
+    assert single.stdout.startswith("reference: cached (user cache) 32x18, 4 spp, seed 7, frame 2")
+
+
+@pytest.mark.blender
+@pytest.mark.render
 def test_ctrl_c_twice_stops_the_render_and_writes_nothing(fog_blend, tmp_path):
     exe = Path(sys.executable).with_name("xsl-render")
     cache = tmp_path / "cache"
@@ -225,6 +275,8 @@ def test_ctrl_c_twice_stops_the_render_and_writes_nothing(fog_blend, tmp_path):
     (("--seed", "-1"), "--seed: must be a whole number from 0 to 2147483647"),
     (("--max-spp", "0"), "--max-spp: must be a whole number from 1 to 1048576"),
     (("--out", "r.png"), "must be a .exr file"),
+    (("--frames", "3-1"), "--frames 3-1: the end frame 1 is before the start frame 3"),
+    (("--frames", "1-2", "--frame", "1"), "--frame and --frames cannot be combined"),
 ])
 @pytest.mark.blender          # the command line, as a user runs it
 def test_bad_values_exit_2_with_one_line(extra, message, tmp_path):

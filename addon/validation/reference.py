@@ -9,15 +9,21 @@ Ctrl-C follows the command line's convention (``operators/interrupt.py``): the f
 stop after the render, which then writes nothing; the second stops at once. Either way the
 cache never holds half an entry: the image and its record go through temporary names, the
 record last.
+
+The references of several frames (``ensure_references``) are rendered one after another in
+one Cycles session: persistent data stays on between them, so a scene whose volumes do not
+move (the street example: only the camera does) builds its volume octree once. Each frame is
+cached as it is done, so a cancelled run keeps every finished frame.
 """
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Sequence
 
 from ...core.files import file_sha256
-from ...core.progress import ProgressCallback
+from ...core.progress import ProgressCallback, WeightedSteps
 from ...core.sampling.render_options import RenderOptions
 from ...core.validation.reference import (REFERENCE_SEED, CachedReference, ReferenceInputs,
                                           check_reference_options, default_reference_spp,
@@ -99,6 +105,46 @@ def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback 
     return Reference(entry.path, inputs, "rendered", stats)
 
 
+def ensure_references(scene, inputs: Sequence[ReferenceInputs], progress: ProgressCallback | None = None,
+                       environ=None, file_name: str | None = None,
+                       on_frame: Callable[[Reference], object] | None = None) -> list[Reference]:
+    """``ensure_reference`` for several frames of one scene, in the order given, in one
+    Cycles session (persistent data on throughout, so static volumes are synced once).
+
+    ``on_frame(reference)`` runs as soon as each is ready (cached or rendered), so a cancel
+    (``Cancelled``, between frames or after the current render) keeps the frames before it.
+    The scene is left as it was found (frame, persistent data and every other setting).
+    Cached frames cost no share of the progress; the user cache folder is checked for
+    writing before the first render.
+    """
+    inputs = list(inputs)
+    hits = [find_reference(item.key, environ) for item in inputs]
+    folder = None
+    if any(hit is None for hit in hits):
+        folder = check_output_folder(user_folder(environ), "the reference cache")
+    steps = WeightedSteps(progress, [0.0 if hit is not None else 1.0 for hit in hits])
+    done: list[Reference] = []
+    with preserved_scene(scene):
+        scene.render.use_persistent_data = True
+        for index, item in enumerate(inputs):
+            label = f"frame {item.frame} ({index + 1}/{len(inputs)})"
+            steps.begin(label)
+            found = find_reference(item.key, environ)       # another process may have made it
+            if found is not None:
+                reference = _from_cache(found, item)
+            else:
+                if folder is None:              # a cached entry went away since the lookup
+                    folder = check_output_folder(user_folder(environ), "the reference cache")
+                image, stats = render_reference(scene, item, steps.sub(label, echo="uniform: "))
+                entry = write_reference(folder, item, image, stats, file_name=file_name)
+                reference = Reference(entry.path, item, "rendered", stats)
+            steps.finish()
+            if on_frame is not None:
+                on_frame(reference)
+            done.append(reference)
+    return done
+
+
 def _from_cache(found: CachedReference, inputs: ReferenceInputs) -> Reference:
     return Reference(found.path, inputs, found.source, found.record.get("stats", {}))
 
@@ -113,6 +159,6 @@ def render_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback 
         scene.frame_set(inputs.frame)
         outcome = render_uniform(scene, options, spp=inputs.spp, progress=progress)
     stats = {key: outcome.stats[key] for key in ("mode", "resolution", "seed", "wall_s", "phases_s",
-                                                  "mean_spp", "total_samples")}
+                                                  "mean_spp", "total_samples", "cycles_sync_s")}
     stats["reference_wall_s"] = time.perf_counter() - started
     return outcome.image, stats

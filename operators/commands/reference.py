@@ -5,6 +5,10 @@ ceiling)``, the ceiling being --max-spp or the scene's own Cycles samples), a se
 contestant uses (7), denoised as every run is, written as float32 OpenEXR. Cached by the
 file's bytes, scene, frame, resolution, samples, seed, Blender version and denoiser version
 (``core.validation.reference``): a second call copies the cached image and says so.
+
+``--frames 1-24 --out 'ref/frame_####.exr'``: the reference of each frame, in one process
+and one Cycles session (static volumes are synced once), each cached and copied to its
+numbered file as soon as it is done, so Ctrl-C keeps the frames already finished.
 """
 from __future__ import annotations
 
@@ -23,7 +27,12 @@ def add_arguments(parser) -> None:
 
     add_scene_arguments(parser)
     parser.add_argument("--out", required=True, metavar="REF.exr", type=argtypes.output_file(".exr"),
-                        help="where to write the reference")
+                        help="where to write the reference (with --frames: its last run of # "
+                             "becomes the frame number, ref/frame_####.exr, else 4 digits are "
+                             "added before .exr)")
+    parser.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                        help="the references of these frames (1-24, 1-24:2 or a list such as "
+                             "1-3,8), one after another in one Cycles session, each cached")
     parser.add_argument("--spp", type=argtypes.SAMPLES, metavar="N",
                         help="samples per pixel (default max(1024, 16 x the ceiling))")
     parser.add_argument("--seed", type=argtypes.SEED, default=REFERENCE_SEED,
@@ -42,6 +51,37 @@ def ceiling(text: str) -> int:
 
     limit = f" (its reference takes {SPP_PER_CEILING}x as many samples; Cycles' limit)"
     return argtypes.integer(1, MAX_SAMPLES // SPP_PER_CEILING, limit)(text)
+
+
+def _frames(args) -> tuple[int, ...] | None:
+    """The --frames list (None without it)."""
+    from ...core.errors import InputError
+    from ...core.frames import parse_frame_list
+
+    if args.frames is None:
+        return None
+    if args.frame is not None:
+        raise InputError("--frame and --frames cannot be combined")
+    return parse_frame_list(args.frames)
+
+
+def check(args) -> None:
+    _frames(args)
+
+
+def files(args) -> tuple[dict, dict]:
+    """With --frames, every frame's file (each checked like --out before Blender loads)."""
+    from ...core.frames import frame_path
+
+    frames = _frames(args)
+    if frames is None:
+        return {}, {}
+    return {}, {f"frame {frame}": frame_path(str(args.out), frame) for frame in frames}
+
+
+def outputs_as_a_set(args) -> bool:
+    """One reference appears with the command's end; with --frames each frame as it is done."""
+    return args.frames is None
 
 
 def scene_file(args) -> Path:
@@ -75,6 +115,9 @@ def run(args) -> int:
 
     path = scene_file(args)
     scene = open_blend(args.scene, args.scene_name)
+    frames = _frames(args)
+    if frames is not None:
+        return _run_frames(args, scene, path, resolution, frames)
     inputs = reference_inputs(scene, path, spp=args.spp, seed=args.seed, resolution=resolution,
                               frame=args.frame, max_spp=args.max_spp)
     bar = None if args.quiet else ProgressBar(NAME)
@@ -94,4 +137,51 @@ def run(args) -> int:
         where = "shipped with the repository" if reference.source == "shipped" else "user cache"
         print(f"reference: cached ({where}) {what}: {reference.path} -> {out}")
     print(f"reference: key {inputs.key}", file=sys.stderr)
+    return 0
+
+
+def _describe(reference) -> str:
+    inputs = reference.inputs
+    return (f"{inputs.resolution[0]}x{inputs.resolution[1]}, {inputs.spp} spp, seed {inputs.seed}, "
+            f"frame {inputs.frame}")
+
+
+def _run_frames(args, scene, path: Path, resolution, frames) -> int:
+    """Every frame's reference, found or rendered, copied to its numbered file as it is ready."""
+    from ...addon.validation.reference import ensure_references, reference_inputs
+    from ...core.files import file_sha256
+    from ...core.frames import frame_path
+    from ...core.validation.reference import copy_file
+    from ..interrupt import InterruptToCancel
+    from ..progress_bar import ProgressBar
+
+    digest = file_sha256(path)
+    inputs = [reference_inputs(scene, path, spp=args.spp, seed=args.seed, resolution=resolution,
+                               frame=frame, max_spp=args.max_spp, blend_sha256=digest)
+              for frame in frames]
+    counts = {"rendered": 0, "cached": 0}
+
+    def on_frame(reference) -> None:
+        out = Path(frame_path(str(args.out), reference.inputs.frame))
+        copy_file(reference.path, out)
+        if reference.source == "rendered":
+            counts["rendered"] += 1
+            print(f"reference: rendered {_describe(reference)} in "
+                  f"{reference.stats['reference_wall_s']:.1f} s (Cycles synced the scene for "
+                  f"{reference.stats.get('cycles_sync_s', 0.0):.1f} s) -> {out}", flush=True)
+        else:
+            counts["cached"] += 1
+            where = "shipped with the repository" if reference.source == "shipped" else "user cache"
+            print(f"reference: cached ({where}) {_describe(reference)} -> {out}", flush=True)
+        print(f"reference: frame {reference.inputs.frame} key {reference.inputs.key}", file=sys.stderr)
+
+    bar = None if args.quiet else ProgressBar(NAME)
+    try:
+        with InterruptToCancel() as interrupt:
+            ensure_references(scene, inputs, progress=interrupt.wrap(bar), file_name=path.name,
+                              on_frame=on_frame)
+    finally:
+        if bar is not None:
+            bar.close()
+    print(f"reference: {len(frames)} frames, {counts['rendered']} rendered, {counts['cached']} from the cache")
     return 0
