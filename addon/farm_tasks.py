@@ -1,5 +1,13 @@
-"""The Blender side of a farm job's tasks: the maps of a frame, a share of its rectangles,
-or (a guided job) the whole frame within its time budget.
+"""The Blender side of a farm job's tasks: the maps of a chunk of frames, a share of each of
+their rectangles, or (a guided job) the whole frames, each within its time budget.
+
+A task takes a chunk of frames (the job template's ``FramesPerTask``) and renders them one
+after another in one Blender process, so the scene is opened once and Cycles syncs it once
+per chunk: with persistent data a later frame syncs only what changed (a moving camera), not
+the heterogeneous fog's volume octree (3.5 s on balls_b when the machine is idle; a later
+frame of the chunk reports under 0.01 s). Each
+frame is kept as soon as it is done, so a task killed mid-chunk and run again renders only
+the frames (or rectangles) it had not finished.
 
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
 ``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
@@ -9,25 +17,29 @@ task with nothing left to do returns at once. The pixels come from
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
 
 ``device`` (the job's Device: CPU or GPU) is set on the opened copy of the scene, never
-written; None keeps the scene's own. ``progress`` gets (fraction, message) as the task goes
-(the farm-task command prints them as Open Job Description's progress and status lines).
+written; None keeps the scene's own. ``progress`` gets (fraction of the chunk, message
+naming the frame) as the task goes (the farm-task command prints them as Open Job
+Description's progress and status lines). Each task returns one ``TaskOutcome`` per frame,
+in the order of ``frames``.
 """
 from __future__ import annotations
 
 import os
+import shutil
 import socket
 import time
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..core.errors import InputError
 from ..core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
                                scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
 from ..core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ..core.farm.task_groups import plan_group
-from ..core.files import json_digest
+from ..core.files import atomic_path, json_digest
+from ..core.maps.camera_rays import CACHE_NAME
 from ..core.maps.files import write_map_set
 from ..core.maps.options import MapOptions
 from ..core.progress import ProgressCallback
@@ -41,8 +53,10 @@ Log = Callable[[str], None]
 
 @dataclass
 class TaskOutcome:
-    """What a task did: its work items, those rendered now and those already finished."""
+    """What a task did for one frame: its work items, those rendered now and those already
+    finished."""
 
+    frame: int
     total: int
     done_now: list[str] = field(default_factory=list)
     reused: list[str] = field(default_factory=list)
@@ -63,125 +77,227 @@ def _open(scene_path, scene_name: str, frame: int, device: str | None):
     return scene
 
 
-def run_maps_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
+def _part(progress: ProgressCallback | None, start: float, end: float, prefix: str) -> ProgressCallback:
+    """``progress`` for one frame of a chunk: its fractions mapped onto [start, end]."""
+    def report(fraction: float, message: str):
+        if progress is not None:
+            return progress(start + (end - start) * min(1.0, max(0.0, fraction)), prefix + message)
+        return False
+    return report
+
+
+def _task_record(frames: Sequence[int]) -> dict:
+    """Which task made a frame: the process, the machine and the frames of its chunk."""
+    return {"frames": list(frames), "pid": os.getpid(), "host": socket.gethostname(),
+            "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+
+
+def _carry_rays(previous: Path | None, folder: Path) -> None:
+    """Give ``folder`` the previous frame's ray cache when it has none: the X map reuses the
+    camera rays while the camera and geometry stay (its key says whether they did) and casts
+    new ones otherwise, so a chunk of a still shot casts them once."""
+    source, target = (None if previous is None else previous / CACHE_NAME), folder / CACHE_NAME
+    if source is None or not source.is_file() or target.exists():
+        return
+    folder.mkdir(parents=True, exist_ok=True)
+    with atomic_path(target) as temporary:
+        shutil.copyfile(source, temporary)
+
+
+def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int], output: str | Path,
                   mode: str, map_options: MapOptions, options: RenderOptions,
-                  device: str | None = None, progress: ProgressCallback | None = None) -> TaskOutcome:
-    """Director maps and tile plan of ``frame`` unless a finished plan for the same inputs exists."""
+                  device: str | None = None, progress: ProgressCallback | None = None) -> list[TaskOutcome]:
+    """Director maps and tile plan of each of ``frames`` that has no finished plan for the same
+    inputs; each plan is written as soon as its frame's maps are."""
     from .scene.blend_session import check_blend_file
 
-    started = time.perf_counter()
-    files = FrameFiles(Path(output), frame)
     check_blend_file(scene_path)
-    inputs = maps_inputs(scene_sha256(scene_path), scene_name, frame, mode, map_options.to_dict(), options)
-    if valid_plan(files, inputs) is not None:
-        return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started)
-
-    from .maps.director_maps import compute_maps
-
-    scene = _open(scene_path, scene_name, frame, device)
-    maps = compute_maps(scene, map_options, size=options.resolution, frame=frame, cache_dir=files.maps,
-                        progress=progress)
-    maps.info["file"] = str(scene_path)
-    write_map_set(files.maps, maps)
-    plan = make_plan(maps.director(mode), options)
-    write_plan_record(files, inputs, plan, files.maps / f"{mode}.exr",
-                      {"seconds": maps.info["seconds"], "warnings": maps.info.get("warnings", [])})
-    return TaskOutcome(1, done_now=[files.stem], seconds=time.perf_counter() - started)
-
-
-def run_tiles_task(scene_path: str | Path, frame: int, output: str | Path, group: int, groups: int,
-                   log: Log | None = None, device: str | None = None,
-                   progress: ProgressCallback | None = None) -> TaskOutcome:
-    """Render the rectangles of ``frame`` that task ``group`` of ``groups`` owns and that have
-    no finished image yet; each is written (image, then record) as soon as it is rendered."""
-    from .scene.blend_session import check_blend_file
-
-    started = time.perf_counter()
-    log = log or (lambda line: None)
-    files = FrameFiles(Path(output), frame)
-    check_blend_file(scene_path)
-    record = load_plan(files)
-    if scene_sha256(scene_path) != record.scene_digest:
-        raise InputError(f"{scene_path} is not the scene the maps of frame {frame} were computed "
-                         "from (it changed, or is another file); rerun the maps step")
-    if renderer_version() != record.blender:
-        raise InputError(f"frame {frame} was planned with Blender {record.blender} but this machine "
-                         f"renders with {renderer_version()}; one job needs one Blender release")
-    options = record.options
-    mine = plan_group(record.plan.rects, group, groups, options.render_cost)
-    outcome = TaskOutcome(len(mine))
-    todo = []
-    for rect in mine:
-        if valid_tile(files, record, rect) is None:
-            todo.append(rect)
+    digest = scene_sha256(scene_path)
+    outcomes, todo = {}, []
+    for frame in frames:
+        started = time.perf_counter()
+        files = FrameFiles(Path(output), frame)
+        inputs = maps_inputs(digest, scene_name, frame, mode, map_options.to_dict(), options)
+        if valid_plan(files, inputs) is not None:
+            outcomes[frame] = TaskOutcome(frame, 1, reused=[files.stem],
+                                          seconds=time.perf_counter() - started)
         else:
-            outcome.reused.append(files.rect_name(rect))
-    if not todo:
+            todo.append((files, inputs))
+    if todo:
+        from .maps.director_maps import compute_maps
+
+        scene = _open(scene_path, scene_name, todo[0][0].frame, device)
+        previous, skipped = None, len(frames) - len(todo)
+        for index, (files, inputs) in enumerate(todo):
+            started = time.perf_counter()
+            _carry_rays(previous, files.maps)
+            report = _part(progress, (skipped + index) / len(frames), (skipped + index + 1) / len(frames),
+                           f"frame {files.frame}: ")
+            maps = compute_maps(scene, map_options, size=options.resolution, frame=files.frame,
+                                cache_dir=files.maps, progress=report)
+            maps.info["file"] = str(scene_path)
+            write_map_set(files.maps, maps)
+            plan = make_plan(maps.director(mode), options)
+            write_plan_record(files, inputs, plan, files.maps / f"{mode}.exr",
+                              {"seconds": maps.info["seconds"], "warnings": maps.info.get("warnings", []),
+                               "ray_cache_hit": bool(maps.info["x"]["cache"]["hit"]),
+                               "task": _task_record(frames)})
+            outcomes[files.frame] = TaskOutcome(files.frame, 1, done_now=[files.stem],
+                                                seconds=time.perf_counter() - started)
+            previous = files.maps
+    return [outcomes[frame] for frame in frames]
+
+
+def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | Path, group: int,
+                   groups: int, log: Log | None = None, device: str | None = None,
+                   progress: ProgressCallback | None = None) -> list[TaskOutcome]:
+    """Render the rectangles of each of ``frames`` that task ``group`` of ``groups`` owns and
+    that have no finished image yet, the frames one after another in one Cycles session;
+    each rectangle is written (image, then record) as soon as it is rendered."""
+    from .scene.blend_session import check_blend_file
+
+    log = log or (lambda line: None)
+    check_blend_file(scene_path)
+    digest = scene_sha256(scene_path)
+    work = []
+    for frame in frames:
+        started = time.perf_counter()
+        files = FrameFiles(Path(output), frame)
+        record = load_plan(files)
+        if digest != record.scene_digest:
+            raise InputError(f"{scene_path} is not the scene the maps of frame {frame} were computed "
+                             "from (it changed, or is another file); rerun the maps step")
+        if renderer_version() != record.blender:
+            raise InputError(f"frame {frame} was planned with Blender {record.blender} but this machine "
+                             f"renders with {renderer_version()}; one job needs one Blender release")
+        mine = plan_group(record.plan.rects, group, groups, record.options.render_cost)
+        outcome = TaskOutcome(frame, len(mine))
+        todo = []
+        for rect in mine:
+            if valid_tile(files, record, rect) is None:
+                todo.append(rect)
+            else:
+                outcome.reused.append(files.rect_name(rect))
         outcome.seconds = time.perf_counter() - started
-        return outcome
+        work.append((files, record, todo, outcome))
+    outcomes = [outcome for *_, outcome in work]
+    pending = [item for item in work if item[2]]
+    if not pending:
+        return outcomes
 
     from .cycles.selective_render import prepare_render, render_rect
-    from .cycles.tile_render import CyclesWindowRenderer
     from .scene.state import preserved_scene
 
+    names = {record.scene_name for _, record, _, _ in pending}
+    if len(names) > 1:
+        raise InputError(f"the frames {', '.join(str(f) for f in frames)} were planned from "
+                         f"different scenes ({', '.join(sorted(names))}); one task renders one scene")
+    label = f"task {group}/{groups}"
+    total = sum(outcome.total for outcome in outcomes) or 1
+    done = sum(len(outcome.reused) for outcome in outcomes)
     report = progress or (lambda fraction, message: None)
-    report(len(outcome.reused) / len(mine), f"opening the scene, {len(todo)} rectangles to render")
-    scene = _open(scene_path, record.scene_name, frame, device)
+    report(done / total, f"{label}: opening the scene, "
+           f"{sum(len(todo) for _, _, todo, _ in pending)} rectangles to render")
+    scene = _open(scene_path, pending[0][1].scene_name, pending[0][0].frame, device)
+    renderer, made_for = None, None
     with preserved_scene(scene):
-        width, height, outcome.warnings = prepare_render(scene, options)
-        if (width, height) != (record.plan.width, record.plan.height):
-            raise InputError(f"the plan of frame {frame} is {record.plan.width}x{record.plan.height} "
-                             f"but the scene renders {width}x{height}; rerun the maps step")
-        with CyclesWindowRenderer(scene, options.seed, guides=options.denoise) as renderer:
-            for rect in todo:
-                piece = render_rect(renderer, rect, options)
-                write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
-                    "group": group, "groups": groups, "spp": rect.spp,
-                    "samples_rendered": piece.rendered.samples_rendered,
-                    "seconds": piece.rendered.seconds, "render_id": uuid.uuid4().hex,
-                    "pid": os.getpid(), "host": socket.gethostname(),
-                    "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())})
-                name = files.rect_name(rect)
-                outcome.done_now.append(name)
-                log(f"rendered {name} at {rect.spp} spp in {piece.rendered.seconds:.2f} s")
-                done = len(outcome.reused) + len(outcome.done_now)
-                report(done / len(mine), f"rendered {done} of {len(mine)} rectangles")
-    outcome.seconds = time.perf_counter() - started
-    return outcome
+        try:
+            for files, record, todo, outcome in pending:
+                started = time.perf_counter()
+                frame, options = files.frame, record.options
+                scene.frame_set(frame)
+                width, height, warnings = prepare_render(scene, options)
+                outcome.warnings = warnings
+                if (width, height) != (record.plan.width, record.plan.height):
+                    raise InputError(f"the plan of frame {frame} is {record.plan.width}x"
+                                     f"{record.plan.height} but the scene renders {width}x{height}; "
+                                     "rerun the maps step")
+                renderer, made_for = _window_renderer(renderer, made_for, scene, options)
+                for rect in todo:
+                    piece = render_rect(renderer, rect, options)
+                    write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
+                        "group": group, "groups": groups, "spp": rect.spp,
+                        "samples_rendered": piece.rendered.samples_rendered,
+                        "seconds": piece.rendered.seconds,
+                        "cycles_sync_s": piece.rendered.sync_seconds, "render_id": uuid.uuid4().hex,
+                        "pid": os.getpid(), "host": socket.gethostname(), "frames": list(frames),
+                        "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())})
+                    name = files.rect_name(rect)
+                    outcome.done_now.append(name)
+                    log(f"frame {frame}, {label}: rendered {name} at {rect.spp} spp in "
+                        f"{piece.rendered.seconds:.2f} s")
+                    done += 1
+                    report(done / total, f"frame {frame}, {label}: rendered "
+                           f"{len(outcome.reused) + len(outcome.done_now)} of {outcome.total} rectangles")
+                outcome.seconds += time.perf_counter() - started
+        finally:
+            if renderer is not None:
+                renderer.close()
+    return outcomes
 
 
-def run_guided_task(scene_path: str | Path, scene_name: str, frame: int, output: str | Path,
+def _window_renderer(renderer, made_for: tuple | None, scene, options: RenderOptions):
+    """(renderer, what it was made for): one Cycles window renderer for the frames of a chunk
+    (persistent data: the scene is synced once), a new one only where a frame's plan asks for
+    another seed, denoising guides or size."""
+    from .cycles.tile_render import CyclesWindowRenderer
+    from .scene.probe import render_size
+
+    wanted = (options.seed, options.denoise, render_size(scene))
+    if renderer is not None and made_for == wanted:
+        return renderer, made_for
+    if renderer is not None:
+        renderer.close()
+    return CyclesWindowRenderer(scene, options.seed, guides=options.denoise), wanted
+
+
+def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[int], output: str | Path,
                     guided: GuidedOptions, map_options: MapOptions, options: RenderOptions,
-                    device: str | None = None, progress: ProgressCallback | None = None) -> TaskOutcome:
-    """Render ``frame`` with the guided sampler within ``guided.time_budget`` (its importance
-    map inside the budget) unless its files are finished for the same inputs; write the
-    image, samples and statistics as one set (``core.farm.frame_outputs``). ``options``:
-    the resolution, seed and denoising; its ``max_spp`` the ceiling the statistics report.
-    ``TaskOutcome.warnings`` holds the render's (a budget overrun among them)."""
+                    device: str | None = None, progress: ProgressCallback | None = None) -> list[TaskOutcome]:
+    """Render each of ``frames`` whose files are not finished for the same inputs with the
+    guided sampler, each within ``guided.time_budget`` (its importance map inside the
+    budget), one after another in one Cycles session (``animation.frames_steps``); write each
+    frame's image, samples and statistics as one set (``core.farm.frame_outputs``) as soon as
+    it is rendered. ``options``: the resolution, seed and denoising; its ``max_spp`` the
+    ceiling the statistics report. A frame's ``warnings`` hold its render's (a budget
+    overrun among them)."""
     from .scene.blend_session import check_blend_file
 
-    started = time.perf_counter()
-    files = FrameFiles(Path(output), frame)
     check_blend_file(scene_path)
+    digest = scene_sha256(scene_path)
     uses_maps = guided.importance != "none"
-    inputs = guided_inputs(scene_sha256(scene_path), scene_name, frame, guided.to_dict(),
-                           map_options.to_dict() if uses_maps else None, options)
-    finished = valid_frame_outputs(files, json_digest(inputs))
-    if finished is not None:
-        return TaskOutcome(1, reused=[files.stem], seconds=time.perf_counter() - started, stats=finished)
+    outcomes, inputs = {}, {}
+    for frame in frames:
+        started = time.perf_counter()
+        files = FrameFiles(Path(output), frame)
+        inputs[frame] = guided_inputs(digest, scene_name, frame, guided.to_dict(),
+                                      map_options.to_dict() if uses_maps else None, options)
+        finished = valid_frame_outputs(files, json_digest(inputs[frame]))
+        if finished is not None:
+            outcomes[frame] = TaskOutcome(frame, 1, reused=[files.stem], stats=finished,
+                                          seconds=time.perf_counter() - started)
+    todo = [frame for frame in frames if frame not in outcomes]
+    if todo:
+        from ..core.progress import run_steps, scaled_steps
+        from .animation import estimated_frame, frames_steps, guided_frame
+        from .maps.estimator_choice import estimator_spp
 
-    from ..core.progress import run_steps
-    from .animation import estimated_frame, guided_frame
-    from .maps.estimator_choice import estimator_spp
+        def on_frame(result) -> None:
+            files = FrameFiles(Path(output), result.frame)
+            outcome = result.outcome
+            stats = guided_frame_record(inputs[result.frame], {
+                **outcome.stats, "frame": result.frame, "file": str(scene_path),
+                "out": str(files.image), "task": _task_record(frames)})
+            scale = preview_scale(guided.max_spp, outcome.samples)
+            attributes = frame_attributes(stats["mode"], scale, options.seed, stats["mean_spp"])
+            write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
+            outcomes[result.frame] = TaskOutcome(result.frame, 1, done_now=[files.stem],
+                                                 warnings=list(outcome.warnings),
+                                                 seconds=stats["wall_s"], stats=stats)
 
-    scene = _open(scene_path, scene_name, frame, device)
-    job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen), options,
-                          estimator_spp("guided", options, {"guided": guided}))
-    outcome = run_steps(job(scene), progress).outcome
-    stats = guided_frame_record(inputs, {**outcome.stats, "frame": frame, "file": str(scene_path),
-                                         "out": str(files.image)})
-    scale = preview_scale(guided.max_spp, outcome.samples)
-    attributes = frame_attributes(stats["mode"], scale, options.seed, stats["mean_spp"])
-    write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
-    return TaskOutcome(1, done_now=[files.stem], warnings=list(outcome.warnings),
-                       seconds=time.perf_counter() - started, stats=stats)
+        scene = _open(scene_path, scene_name, todo[0], device)
+        job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen), options,
+                              estimator_spp("guided", options, {"guided": guided}))
+        run_steps(scaled_steps(frames_steps(scene, todo, job, on_frame),
+                               1.0 - len(todo) / len(frames), 1.0), progress)
+    return [outcomes[frame] for frame in frames]

@@ -82,10 +82,14 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
         "total_samples": int(round(total)), "mean_spp": total / plan.pixels,
         "gold_samples": plan.gold_samples, "ideal_speedup": plan.ideal_speedup,
         "renders": len(plan.rects), "render_s": render_seconds,
+        # Cycles' scene sync over the frame's rectangles: paid by the first render of each
+        # tile task's session (a later frame of a chunk syncs only what moved).
+        "cycles_sync_s": sum(float(tile.get("cycles_sync_s") or 0.0) for tile in tiles),
         "phases_s": {"maps": float(record.data.get("seconds", {}).get("total", 0.0)),
                      "renders": render_seconds, "composite": 0.0, "denoise": denoise_seconds},
         "tiles": [{**rect.to_dict(), "seconds": tile.get("seconds"), "group": tile.get("group"),
-                   "samples_rendered": tile.get("samples_rendered")}
+                   "samples_rendered": tile.get("samples_rendered"),
+                   "cycles_sync_s": tile.get("cycles_sync_s")}
                   for rect, tile in zip(plan.rects, tiles)],
         "grouping": None if groups is None else group_plan(plan.rects, groups, options.render_cost).to_dict(),
         "options": options.to_dict(), "map_options": record.data["inputs_detail"]["map_options"],

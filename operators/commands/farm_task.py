@@ -1,26 +1,32 @@
-"""``xsl-render farm-task maps|tiles|composite``: the steps of a farm job (``xsl-render farm``).
+"""``xsl-render farm-task maps|tiles|composite|guided``: the steps of a farm job (``xsl-render farm``).
 
-The job template calls these; a person rarely does. Each is safe to run again: finished,
-current results are kept (``core.farm.files``), so a crashed or cancelled job resumes.
+The job template calls these; a person rarely does. Each takes one frame (``--frame N``) or
+a chunk of frames (``--frames 1-8``, ``--frames 9,11,15-17``: what the template's
+``{{Task.Param.Frame}}`` expands to) and renders a chunk's frames one after another in one
+Blender process, Cycles syncing the scene once. Each is safe to run again: finished, current
+results (a frame's plan, a rectangle, a finished frame) are kept (``core.farm.files``), so a
+crashed or cancelled job resumes, rendering only what a killed task had not finished.
 
-    farm-task maps SCENE.blend --frame N --output DIR --scene-name S --mode xs|xsl
+    farm-task maps SCENE.blend --frame N|--frames F --output DIR --scene-name S --mode xs|xsl
         --max-spp N --resolution WxH [map options] [tile options]
-        -> DIR/work/frame_NNNN/maps/ and plan.json
-    farm-task tiles SCENE.blend --frame N --output DIR --group G --groups K
+        -> DIR/work/frame_NNNN/maps/ and plan.json of each frame
+    farm-task tiles SCENE.blend --frame N|--frames F --output DIR --group G --groups K
         -> DIR/work/frame_NNNN/tiles/<rectangle>.exr + .json for the rectangles of task G of K
-    farm-task composite --frame N --output DIR [--groups K]
+    farm-task composite --frame N|--frames F --output DIR [--groups K]
         -> DIR/frame_NNNN.exr, frame_NNNN_spp.exr/.png, frame_NNNN.json
-    farm-task guided SCENE.blend --frame N --output DIR --scene-name S --resolution WxH
+    farm-task guided SCENE.blend --frame N|--frames F --output DIR --scene-name S --resolution WxH
         --time-budget SECONDS [--max-spp N (0: no ceiling)] [--importance none|x|xs|xsl]
         [--pilot-fraction F] [--guided-exponent Y] [--level-ratio R] [--tile-size N] [--seed N]
         [map options]
-        -> the same files as composite, the frame rendered with the guided sampler
+        -> the same files as composite, each frame rendered with the guided sampler within
+           the time budget
 
 maps, tiles and guided take ``--device CPU|GPU`` (the job's Device; default: the scene's).
-Every step prints ``openjd_progress: N`` and ``openjd_status: text`` lines as it goes, which
-a farm shows in its monitor. A cancelled task (SIGTERM, the template's NOTIFY_THEN_TERMINATE)
-removes its temporaries and exits 143 (``operators/signals.py``): what it finished stays,
-nothing half-written does.
+Every step prints ``openjd_progress: N`` (over the whole chunk) and ``openjd_status: text``
+lines as it goes, which a farm shows in its monitor, and one line per frame at the end
+(rendered now or already done). A cancelled task (SIGTERM, the template's
+NOTIFY_THEN_TERMINATE) removes its temporaries and exits 143 (``operators/signals.py``):
+what it finished stays, nothing half-written does.
 """
 from __future__ import annotations
 
@@ -43,7 +49,11 @@ OUTPUTS_AS_A_SET = False
 
 
 def _frame_arguments(parser, renders: bool = True) -> None:
-    parser.add_argument("--frame", type=argtypes.FRAME, required=True, help="the frame")
+    which = parser.add_mutually_exclusive_group(required=True)
+    which.add_argument("--frame", type=argtypes.FRAME, help="the frame")
+    which.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                       help="a chunk of frames, one after another in one process: 1-8, 1-15:2 or "
+                            "a list such as 9,11,15-17 (a CHUNK[INT] task parameter's value)")
     parser.add_argument("--output", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="the job's output folder")
     if renders:
@@ -97,6 +107,22 @@ def add_arguments(parser) -> None:
     _map_arguments(guided)
 
 
+def _frames(args) -> tuple[int, ...]:
+    """The task's frames: --frame N, or the frames of --frames in ascending order."""
+    from ...core.frames import parse_frame_list
+
+    return (args.frame,) if args.frame is not None else parse_frame_list(args.frames)
+
+
+def _chunk(frames: tuple[int, ...]) -> str:
+    """How the status lines name a task's frames: 'frame 7', 'frames 1-8', 'frames 1,3,9'."""
+    if len(frames) == 1:
+        return f"frame {frames[0]}"
+    if frames == tuple(range(frames[0], frames[-1] + 1)):
+        return f"frames {frames[0]}-{frames[-1]}"
+    return "frames " + ",".join(map(str, frames))
+
+
 def check(args) -> None:
     """A guided task's options taken together (``GuidedOptions.check``), before anything loads;
     --max-spp 0 is the job template's "no ceiling"."""
@@ -125,43 +151,44 @@ def _maps(args) -> int:
     from ...core.farm.files import FrameFiles, valid_plan
     from ...core.maps.xmap import XMapWarning
 
+    frames = _frames(args)
     map_options = _map_options(args)
     options = render_options_from_args(args)
     report = TaskProgress()
-    report.status(f"frame {args.frame}: director maps and tile plan")
+    report.status(f"{_chunk(frames)}: director maps and tile plans")
     with warnings_as_lines(MapWarning, XMapWarning):
-        outcome = run_maps_task(args.scene, args.scene_name, args.frame, args.output, args.mode,
-                                map_options, options, device=args.device,
-                                progress=report.callback(f"frame {args.frame}: "))
+        outcomes = run_maps_task(args.scene, args.scene_name, frames, args.output, args.mode,
+                                 map_options, options, device=args.device, progress=report.callback())
     report.progress(1.0)
-    files = FrameFiles(Path(args.output), args.frame)
-    if outcome.reused:
-        print(f"frame {args.frame}: maps and tile plan already done ({files.plan})")
-        return 0
-    plan = valid_plan(files).plan
-    print(f"frame {args.frame}: maps and tile plan written in {outcome.seconds:.2f} s: "
-          f"{len(plan.rects)} rectangles, mean {plan.mean_spp:.2f} spp, "
-          f"ideal speedup {plan.ideal_speedup:.2f}x ({files.plan})")
+    for outcome in outcomes:
+        files = FrameFiles(Path(args.output), outcome.frame)
+        if outcome.reused:
+            print(f"frame {outcome.frame}: maps and tile plan already done ({files.plan})")
+            continue
+        plan = valid_plan(files).plan
+        print(f"frame {outcome.frame}: maps and tile plan written in {outcome.seconds:.2f} s: "
+              f"{len(plan.rects)} rectangles, mean {plan.mean_spp:.2f} spp, "
+              f"ideal speedup {plan.ideal_speedup:.2f}x ({files.plan})")
     return 0
 
 
 def _tiles(args) -> int:
     from ...addon.farm_tasks import run_tiles_task
 
-    def log(line: str) -> None:
-        print(f"frame {args.frame}, task {args.group}/{args.groups}: {line}", flush=True)
-
+    frames = _frames(args)
+    label = f"task {args.group}/{args.groups}"
     report = TaskProgress()
-    report.status(f"frame {args.frame}, task {args.group}/{args.groups}: reading the plan")
-    outcome = run_tiles_task(args.scene, args.frame, args.output, args.group, args.groups, log=log,
-                             device=args.device,
-                             progress=report.callback(f"frame {args.frame}, task {args.group}/{args.groups}: "))
+    report.status(f"{_chunk(frames)}, {label}: reading the plans")
+    outcomes = run_tiles_task(args.scene, frames, args.output, args.group, args.groups,
+                              log=lambda line: print(line, flush=True), device=args.device,
+                              progress=report.callback())
     report.progress(1.0)
-    for warning in outcome.warnings:
+    for warning in dict.fromkeys(w for outcome in outcomes for w in outcome.warnings):
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
-    print(f"frame {args.frame}, task {args.group}/{args.groups}: {outcome.total} rectangles, "
-          f"{len(outcome.done_now)} rendered now, {len(outcome.reused)} already done "
-          f"({outcome.seconds:.2f} s)")
+    for outcome in outcomes:
+        print(f"frame {outcome.frame}, {label}: {outcome.total} rectangles, "
+              f"{len(outcome.done_now)} rendered now, {len(outcome.reused)} already done "
+              f"({outcome.seconds:.2f} s)")
     return 0
 
 
@@ -179,15 +206,17 @@ def _composite(args) -> int:
 
     if args.groups is not None:
         check_groups(args.groups)
-    files = FrameFiles(Path(args.output), args.frame)
+    frames = _frames(args)
     report = TaskProgress()
-    report.status(f"frame {args.frame}: compositing")
-    result = composite_frame(files, args.groups, denoiser=_blender_denoiser)
-    report.progress(1.0)
-    stats = result.stats
-    state = "already done" if result.skipped else "written"
-    print(f"frame {args.frame}: {files.image} {state}: {stats['resolution'][0]}x{stats['resolution'][1]}, "
-          f"mean {stats['mean_spp']:.2f} spp in {stats['renders']} rectangles")
+    for index, frame in enumerate(frames):
+        files = FrameFiles(Path(args.output), frame)
+        report.status(f"frame {frame}: compositing")
+        result = composite_frame(files, args.groups, denoiser=_blender_denoiser)
+        report.progress((index + 1) / len(frames))
+        stats = result.stats
+        state = "already done" if result.skipped else "written"
+        print(f"frame {frame}: {files.image} {state}: {stats['resolution'][0]}x{stats['resolution'][1]}, "
+              f"mean {stats['mean_spp']:.2f} spp in {stats['renders']} rectangles", flush=True)
     return 0
 
 
@@ -197,22 +226,27 @@ def _guided(args) -> int:
     from ...core.farm.files import FrameFiles
     from ...core.maps.xmap import XMapWarning
 
+    frames = _frames(args)
     guided = guided_options_from_args(args)           # --max-spp 0 became None in check()
     options = guided_render_options(guided, args.seed, parse_resolution(args.resolution))
     map_options = _map_options(args)
     report = TaskProgress()
-    report.status(f"frame {args.frame}: guided render within {guided.time_budget:g} s")
+    report.status(f"{_chunk(frames)}: guided render within {guided.time_budget:g} s a frame")
     with warnings_as_lines(MapWarning, XMapWarning):
-        outcome = run_guided_task(args.scene, args.scene_name, args.frame, args.output, guided,
-                                  map_options, options, device=args.device,
-                                  progress=report.callback(f"frame {args.frame}: "))
+        outcomes = run_guided_task(args.scene, args.scene_name, frames, args.output, guided,
+                                   map_options, options, device=args.device, progress=report.callback())
     report.progress(1.0)
-    for warning in outcome.warnings:
-        print(f"xsl-render: warning: frame {args.frame}: {warning}", file=sys.stderr)
-    stats, state = outcome.stats, "already done" if outcome.reused else "written"
-    print(f"frame {args.frame}: {FrameFiles(Path(args.output), args.frame).image} {state}: "
-          f"{stats['resolution'][0]}x{stats['resolution'][1]}, mean {stats['mean_spp']:.2f} spp in "
-          f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of a {guided.time_budget:g} s budget")
+    for outcome in outcomes:
+        for warning in outcome.warnings:
+            print(f"xsl-render: warning: frame {outcome.frame}: {warning}", file=sys.stderr)
+        stats, state = outcome.stats, "already done" if outcome.reused else "written"
+        sync = stats.get("cycles_sync_s")
+        print(f"frame {outcome.frame}: {FrameFiles(Path(args.output), outcome.frame).image} {state}: "
+              f"{stats['resolution'][0]}x{stats['resolution'][1]}, mean {stats['mean_spp']:.2f} spp in "
+              f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of a {guided.time_budget:g} s budget"
+              + ("" if sync is None else f", Cycles sync {sync:.2f} s"))
+    done = sum(len(outcome.done_now) for outcome in outcomes)
+    print(f"{_chunk(frames)}: {done} rendered now, {len(outcomes) - done} already done")
     return 0
 
 
