@@ -141,6 +141,80 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
     assert hashlib.sha256(ROAD.read_bytes()).hexdigest() == scene_digest     # never written
 
 
+def moving_camera(bpy, source: Path, path: Path) -> Path:
+    """``source`` with its camera keyframed to slide sideways from frame 1 to frame 8, saved
+    as ``path`` (every frame then differs, and Cycles syncs only the camera between them)."""
+    bpy.ops.wm.open_mainfile(filepath=str(source))
+    scene = bpy.context.scene
+    for frame in (1, 8):
+        scene.camera.location.x += 0.05 * frame
+        scene.camera.keyframe_insert("location", frame=frame)
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+CHUNK = ["--max-spp", "4", "--tile-size", "8", "--seed", "3", "--resolution", "32x18"]
+
+
+@pytest.mark.render
+def test_a_chunk_of_frames_is_one_process_per_task_and_equals_render(cli, blender, tmp_path):
+    """Frames 1-3 with FramesPerTask 8: one Maps task, two Tiles tasks (the chunk x Group 1, 2)
+    and one Composite task, each rendering the three frames in one process, to the images
+    of one `xsl-render render --frames 1-3`."""
+    scene = moving_camera(blender, ROAD, tmp_path / "road_moving.blend")
+    bundle = tmp_path / "bundle"
+    result = cli("farm", scene, "--bundle", bundle, "--frames", "1-3", "--tasks-per-frame", "2", *CHUNK)
+    assert result.returncode == 0 and "up to 8 frame(s) a task" in result.stdout, result.stderr
+    check = openjd("check", bundle / "template.yaml")
+    assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
+    run = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
+    assert run.returncode == 0, run.stdout[-3000:]
+    out = run.stdout
+    for status in ("frames 1-3: director maps and tile plans", "frames 1-3, task 1/2: reading the plans",
+                   "frames 1-3, task 2/2: reading the plans"):
+        assert out.count(f"openjd_status: {status}") == 1, out[-3000:]
+    frames = [FrameFiles(bundle / "output", frame) for frame in (1, 2, 3)]
+    plans = [valid_plan(files) for files in frames]
+    assert len({plan.data["task"]["pid"] for plan in plans}) == 1
+    assert plans[0].data["task"]["frames"] == [1, 2, 3]
+    for group in (1, 2):              # each tile task rendered its share of all three frames
+        records = [read_record(path) for files in frames for path in tile_records(files)]
+        mine = [record for record in records if record["group"] == group]
+        assert {record["inputs_detail"]["frame"] for record in mine} == {1, 2, 3}
+        assert len({record["pid"] for record in mine}) == 1
+        assert f"frame 3, task {group}/2: " in out
+    for files in frames:
+        assert f"frame {files.frame}: {files.image} written: 32x18" in out
+
+    reference = tmp_path / "render" / "f_####.exr"
+    result = cli("render", scene, "--mode", "xsl", "--frames", "1-3", "--out", reference, "--quiet", *CHUNK)
+    assert result.returncode == 0, result.stderr
+    images = []
+    for files in frames:
+        rendered = tmp_path / "render" / f"f_{files.frame:04d}.exr"
+        images.append(read_image(files.image))
+        np.testing.assert_array_equal(images[-1], read_image(rendered))
+        np.testing.assert_array_equal(read_image(files.spp_image),
+                                      read_image(rendered.with_name(f"f_{files.frame:04d}_spp.exr")))
+    assert not np.array_equal(images[0], images[2])                 # the camera moved
+
+
+@pytest.mark.render
+def test_later_frames_of_a_tile_chunk_skip_the_fogs_scene_sync(cli, blender, tmp_path):
+    """balls_b's noise fog makes Cycles build its volume octree at a full sync (seconds);
+    a tile task renders a chunk in one session, so frames 2 and 3 sync only the moved camera.
+    Each frame's record says what Cycles reported."""
+    scene = moving_camera(blender, EXAMPLES / "balls_b.blend", tmp_path / "balls_moving.blend")
+    output = tmp_path / "job"
+    options = ["--max-spp", "4", "--tile-size", "16", "--resolution", "32x24"]
+    for step in (["maps", scene, "--scene-name", "balls_b", "--mode", "xsl", *options],
+                 ["tiles", scene, "--group", "1", "--groups", "1"], ["composite"]):
+        result = cli("farm-task", *step, "--frames", "1-3", "--output", output)
+        assert result.returncode == 0, result.stdout[-2000:] + result.stderr
+    synced = [json.loads(FrameFiles(output, frame).stats.read_text())["cycles_sync_s"] for frame in (1, 2, 3)]
+    assert synced[0] > 0.3 and synced[1] + synced[2] < 0.1 * synced[0], synced
+
+
 def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, tmp_path):
     foreign = tmp_path / "thesis"
     foreign.mkdir()
@@ -191,19 +265,28 @@ GUIDED = ["--mode", "guided", "--time-budget", str(GUIDED_BUDGET), "--importance
           "--tile-size", "16", "--seed", "3", "--resolution", "64x36"]
 
 
+def digests(files: FrameFiles) -> list[str]:
+    return [hashlib.sha256(path.read_bytes()).hexdigest()
+            for path in (files.image, files.spp_image, files.stats)]
+
+
 @pytest.mark.render
-def test_guided_bundle_renders_every_frame_and_a_rerun_skips_them(cli, tmp_path):
+def test_guided_bundle_renders_a_chunk_in_one_process_and_a_rerun_renders_only_missing_frames(cli, tmp_path):
     bundle = tmp_path / "bundle"
-    result = cli("farm", ROAD, "--bundle", bundle, "--frames", "1-2", *GUIDED)
+    result = cli("farm", ROAD, "--bundle", bundle, "--frames", "1-3", *GUIDED)
     assert result.returncode == 0, result.stderr
-    assert "guided within 1.5 s per frame without a ceiling, importance x, one task per frame" in result.stdout
+    assert ("guided within 1.5 s per frame without a ceiling, importance x, up to 8 frame(s) a task"
+            in result.stdout)
     check = openjd("check", bundle / "template.yaml")
     assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
 
     run = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
     assert run.returncode == 0, run.stdout[-3000:]
-    digests = {}
-    for frame in (1, 2):
+    # One task, one process for the chunk 1-3 (FramesPerTask 8), each frame within its budget.
+    assert run.stdout.count("openjd_status: frames 1-3: guided render") == 1, run.stdout[-3000:]
+    assert "frames 1-3: 3 rendered now, 0 already done" in run.stdout
+    before, tasks = {}, set()
+    for frame in (1, 2, 3):
         files = FrameFiles(bundle / "output", frame)
         assert f"frame {frame}: {files.image} written: 64x36" in run.stdout
         stats = json.loads(files.stats.read_text())
@@ -211,20 +294,39 @@ def test_guided_bundle_renders_every_frame_and_a_rerun_skips_them(cli, tmp_path)
         assert stats["inputs_detail"]["guided"]["importance"] == "x" and stats["seed"] == 3
         assert stats["inputs_detail"]["map_options"]["minbound"] is True
         assert stats["phases_s"]["maps"] > 0.0 and stats["mean_spp"] > stats["pilot_spp"] >= 1
+        assert stats["cycles_sync_s"] >= 0.0 and stats["task"]["frames"] == [1, 2, 3]
+        tasks.add(stats["task"]["pid"])
         image = read_image(files.image)
         assert image.shape == (36, 64, 4) and np.isfinite(image).all() and image[..., :3].max() > 0.0
         assert read_image(files.spp_image).shape[:2] == (36, 64) and files.spp_preview.is_file()
-        digests[frame] = [hashlib.sha256(path.read_bytes()).hexdigest()
-                          for path in (files.image, files.spp_image, files.stats)]
+        before[frame] = digests(files)
+    assert len(tasks) == 1
     assert not (bundle / "output" / "work").exists()
 
     rerun = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
     assert rerun.returncode == 0, rerun.stdout[-3000:]
-    for frame in (1, 2):
+    assert "frames 1-3: 0 rendered now, 3 already done" in rerun.stdout
+    for frame in (1, 2, 3):
         files = FrameFiles(bundle / "output", frame)
         assert f"frame {frame}: {files.image} already done" in rerun.stdout
-        assert [hashlib.sha256(path.read_bytes()).hexdigest()
-                for path in (files.image, files.spp_image, files.stats)] == digests[frame]
+        assert digests(files) == before[frame]
+
+    # As if the task had been killed after frame 1: frames 2 and 3 are missing (frame 3's set
+    # whole, frame 2's record only). The task renders those two and keeps frame 1.
+    for path in (FrameFiles(bundle / "output", 3).image, FrameFiles(bundle / "output", 3).spp_image,
+                 FrameFiles(bundle / "output", 3).spp_preview, FrameFiles(bundle / "output", 3).stats,
+                 FrameFiles(bundle / "output", 2).stats):
+        path.unlink()
+    resumed = openjd("run", bundle / "template.yaml", "-p", job_values(bundle), env=private_tmp(tmp_path))
+    assert resumed.returncode == 0, resumed.stdout[-3000:]
+    assert "frames 1-3: 2 rendered now, 1 already done" in resumed.stdout
+    assert f"frame 1: {FrameFiles(bundle / 'output', 1).image} already done" in resumed.stdout
+    assert digests(FrameFiles(bundle / "output", 1)) == before[1]
+    for frame in (2, 3):
+        files = FrameFiles(bundle / "output", frame)
+        assert f"frame {frame}: {files.image} written" in resumed.stdout
+        stats = json.loads(files.stats.read_text())
+        assert stats["task"]["frames"] == [1, 2, 3] and stats["task"]["pid"] not in tasks
 
 
 @pytest.mark.parametrize("command,args,message", [

@@ -20,6 +20,7 @@ from xsl_render.core.farm.job_bundle import MARKER, check_bundle_folder, write_b
 from xsl_render.core.farm.job_template import (FarmJob, job_template, openjd_values,
                                                parameter_values, parse_frames)
 from xsl_render.core.farm.task_groups import group_plan, partition, plan_group
+from xsl_render.core.frames import parse_frame_list
 from xsl_render.core.imageio import read_image, write_exr
 from xsl_render.core.maps.options import MapOptions
 from xsl_render.core.sampling.guided_plan import UNBOUNDED_SPP, GuidedOptions
@@ -100,9 +101,24 @@ def farm_job(tmp_path: Path, **changes) -> FarmJob:
     return FarmJob(**values)
 
 
+def decoded(template: dict):
+    """The template as openjd-model reads it: its chunks need the TASK_CHUNKING extension."""
+    return decode_job_template(template=template, supported_extensions=["TASK_CHUNKING"])
+
+
+def job_tasks(template, values: dict, tmp_path: Path) -> dict[str, list[dict]]:
+    """The tasks of each step of the job ``values`` make: {step: [{parameter: value}]}."""
+    params = preprocess_job_parameters(job_template=template, job_parameter_values=values,
+                                       job_template_dir=tmp_path, current_working_dir=tmp_path)
+    steps = create_job(job_template=template, job_parameter_values=params).steps
+    return {step.name: [{name: value.value for name, value in task.items()}
+                        for task in StepParameterSpaceIterator(space=step.parameterSpace)]
+            for step in steps}
+
+
 def test_template_is_valid_open_job_description_and_static(tmp_path):
     job = farm_job(tmp_path)
-    template = decode_job_template(template=job_template(job))
+    template = decoded(job_template(job))
     values = openjd_values(parameter_values(job))
     assert "OutputDir" not in values                  # relative: the template default applies
     params = preprocess_job_parameters(job_template=template, job_parameter_values=values,
@@ -113,11 +129,16 @@ def test_template_is_valid_open_job_description_and_static(tmp_path):
     assert list(steps) == ["Maps", "Tiles", "Composite"]
     tasks = {name: list(StepParameterSpaceIterator(space=step.parameterSpace))
              for name, step in steps.items()}
-    assert [t["Frame"].value for t in tasks["Maps"]] == ["1", "2", "3"]
-    assert len(tasks["Tiles"]) == 3 * 4                   # Frame x Group, Group = 1..4
+    # Every step takes chunks of FramesPerTask (8) frames: frames 1-3 are one chunk.
+    assert [t["Frame"].value for t in tasks["Maps"]] == ["1-3"]
+    assert [t["Frame"].value for t in tasks["Composite"]] == ["1-3"]
+    assert len(tasks["Tiles"]) == 1 * 4                   # Frame chunk x Group, Group = 1..4
     assert sorted({t["Group"].value for t in tasks["Tiles"]}) == ["1", "2", "3", "4"]
     assert [d.dependsOn for d in steps["Tiles"].dependencies] == ["Maps"]
     assert sorted(d.dependsOn for d in steps["Composite"].dependencies) == ["Maps", "Tiles"]
+    for step in template.steps:
+        args = [str(a) for a in step.script.actions.onRun.args]
+        assert args[args.index("--frames") + 1] == "{{Task.Param.Frame}}" and "--frame" not in args
     maps_args = [str(a) for a in template.steps[0].script.actions.onRun.args]
     for flag in ("--max-spp", "--seed", "--adaptive-threshold", "--light-n", "--minbound-value",
                  "--tile-size", "--resolution", "--scene-name", "--mode"):
@@ -125,7 +146,39 @@ def test_template_is_valid_open_job_description_and_static(tmp_path):
     defaults = {p.name: p.default for p in template.parameterDefinitions}
     assert defaults["XslRender"] == "/opt/xsl/bin/xsl-render" and defaults["LightN"] == "3"
     assert defaults["AdaptiveThreshold"] == "0.02" and defaults["Resolution"] == "96x54"
+    assert defaults["FramesPerTask"] == 8
     assert "SceneFile" not in defaults or defaults["SceneFile"] is None
+
+
+def test_frames_per_task_chunks_every_step_and_a_chunk_expands_to_a_frame_list(tmp_path):
+    """FramesPerTask, chosen at submission, cuts the frames into chunks of at most that
+    many (Open Job Description spreads them evenly); a chunk's text is a frame list that
+    core.frames reads back to exactly the chunk's frames, across gaps and steps."""
+    job = farm_job(tmp_path, frames="1-3,8,10-20:3")
+    template = decoded(job_template(job))
+    values = openjd_values(parameter_values(job))
+    assert values["FramesPerTask"] == 8
+    everything = parse_frame_list(values["Frames"])
+    assert everything == (1, 2, 3, 8, 10, 13, 16, 19)
+    for per_task, count in ((8, 1), (3, 3), (2, 4), (1, 8), (1000, 1)):
+        tasks = job_tasks(template, {**values, "FramesPerTask": per_task}, tmp_path)
+        chunks = [parse_frame_list(t["Frame"]) for t in tasks["Maps"]]
+        assert len(chunks) == count and max(map(len, chunks)) <= per_task, (per_task, chunks)
+        assert [f for chunk in chunks for f in chunk] == list(everything)
+        assert [t["Frame"] for t in tasks["Composite"]] == [t["Frame"] for t in tasks["Maps"]]
+        assert [(t["Frame"], t["Group"]) for t in tasks["Tiles"]] == \
+            [(t["Frame"], str(g)) for t in tasks["Maps"] for g in range(1, 5)]
+    one_each = job_tasks(template, {**values, "FramesPerTask": 1}, tmp_path)["Maps"]
+    assert [t["Frame"] for t in one_each] == [str(f) for f in everything]     # as before chunks
+    for bad in (0, 1001):                             # the form refuses what no task can take
+        with pytest.raises(ValueError):
+            job_tasks(template, {**values, "FramesPerTask": bad}, tmp_path)
+    guided = replace(guided_job(tmp_path), frames="1-250:2", frames_per_task=16)
+    renders = job_tasks(decoded(job_template(guided)), openjd_values(parameter_values(guided)),
+                        tmp_path)["Render"]
+    assert len(renders) == 8 and renders[0]["Frame"] == "1-31:2"     # 125 frames in 8 chunks
+    with pytest.raises(InputError, match="--frames-per-task must be between 1 and 1000"):
+        job_template(replace(job, frames_per_task=0))
 
 
 def test_parameter_values_override_and_an_absolute_output_has_no_default(tmp_path):
@@ -135,7 +188,7 @@ def test_parameter_values_override_and_an_absolute_output_has_no_default(tmp_pat
     assert "default" not in output
     values = openjd_values(parameter_values(job))
     assert values["OutputDir"] == str(tmp_path / "renders") and values["Frames"] == "10"
-    template = decode_job_template(template=data)
+    template = decoded(data)
     params = preprocess_job_parameters(job_template=template, job_parameter_values={**values, "MaxSpp": 8},
                                        job_template_dir=tmp_path, current_working_dir=tmp_path)
     assert params["MaxSpp"].value == "8"
@@ -156,9 +209,9 @@ def guided_job(tmp_path: Path, **guided_changes) -> FarmJob:
                     options=RenderOptions(max_spp=guided.ceiling, tile_size=16, seed=7, resolution=(96, 54)))
 
 
-def test_guided_template_is_one_task_per_frame_with_every_knob_a_parameter(tmp_path):
+def test_guided_template_is_one_task_per_chunk_with_every_knob_a_parameter(tmp_path):
     job = guided_job(tmp_path, max_spp=None, pilot_fraction=0.3, exponent=0.5, level_ratio=2.0)
-    template = decode_job_template(template=job_template(job))
+    template = decoded(job_template(job))
     values = openjd_values(parameter_values(job))
     assert values["TimeBudget"] == 12.5 and values["Importance"] == "xs" and values["MaxSpp"] == 0
     assert (values["PilotFraction"], values["GuidedExponent"], values["LevelRatio"]) == (0.3, 0.5, 2.0)
@@ -169,9 +222,10 @@ def test_guided_template_is_one_task_per_frame_with_every_knob_a_parameter(tmp_p
     job_model = create_job(job_template=template, job_parameter_values=params)
     assert [step.name for step in job_model.steps] == ["Render"]
     tasks = list(StepParameterSpaceIterator(space=job_model.steps[0].parameterSpace))
-    assert [t["Frame"].value for t in tasks] == ["1", "2", "3"]
+    assert [t["Frame"].value for t in tasks] == ["1-3"]            # one chunk of up to 8 frames
     args = [str(a) for a in template.steps[0].script.actions.onRun.args]
     assert args[:3] == ["farm-task", "guided", "{{Param.SceneFile}}"]
+    assert args[args.index("--frames") + 1] == "{{Task.Param.Frame}}" and values["FramesPerTask"] == 8
     for flag, name in (("--time-budget", "TimeBudget"), ("--importance", "Importance"),
                        ("--max-spp", "MaxSpp"), ("--pilot-fraction", "PilotFraction"),
                        ("--guided-exponent", "GuidedExponent"), ("--level-ratio", "LevelRatio"),

@@ -12,9 +12,8 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from openjd.model import (StepParameterSpaceIterator, create_job, decode_job_template,
-                          preprocess_job_parameters)
-from test_farm_core import farm_job, guided_job
+from openjd.model import StepParameterSpaceIterator, create_job, preprocess_job_parameters
+from test_farm_core import decoded, farm_job, guided_job, job_tasks
 
 from xsl_render.core.farm.assets import ScenePath, asset_references, scene_files, sequence_paths, tile_paths
 from xsl_render.core.farm.farm_job import DEFAULT_TASK_TIMEOUT, guided_timeout
@@ -47,10 +46,13 @@ def test_every_action_is_cancelled_notify_then_terminate_with_a_timeout(tmp_path
         assert action["cancelation"] == {"mode": "NOTIFY_THEN_TERMINATE",
                                          "notifyPeriodInSeconds": NOTIFY_PERIOD}
         assert isinstance(action["timeout"], int) and action["timeout"] > 0
-    assert {a["timeout"] for a in actions(selective).values()} == {DEFAULT_TASK_TIMEOUT}
-    assert actions(guided)["Render"]["timeout"] == guided_timeout(12.5) == 25 + 900
+    # A task renders a chunk of FramesPerTask frames (8): its timeout is a frame's times 8.
+    assert {a["timeout"] for a in actions(selective).values()} == {8 * DEFAULT_TASK_TIMEOUT}
+    assert actions(guided)["Render"]["timeout"] == 8 * guided_timeout(12.5) == 8 * (25 + 900)
+    single = job_template(replace(guided_job(tmp_path), frames_per_task=1))
+    assert actions(single)["Render"]["timeout"] == guided_timeout(12.5)
     assert actions(job_template(replace(farm_job(tmp_path), task_timeout=600)))["Tiles"]["timeout"] == 600
-    assert decode_job_template(template=selective) and decode_job_template(template=guided)
+    assert decoded(selective) and decoded(guided)
 
 
 def test_gpu_jobs_ask_for_a_gpu_where_cycles_renders(tmp_path):
@@ -65,14 +67,14 @@ def test_gpu_jobs_ask_for_a_gpu_where_cycles_renders(tmp_path):
     assert tiles[tiles.index("--device") + 1] == "{{Param.Device}}"
     guided = job_template(replace(guided_job(tmp_path), device="GPU"))
     assert guided["steps"][0]["hostRequirements"]["amounts"][0]["name"] == "amount.worker.gpu"
-    decode_job_template(template=gpu)
+    decoded(gpu)
     with pytest.raises(Exception, match="--device"):
         job_template(replace(farm_job(tmp_path), device="TPU"))
 
 
-def test_a_frame_list_makes_one_task_per_listed_frame(tmp_path):
-    job = replace(farm_job(tmp_path), frames="1-3,8")
-    template = decode_job_template(template=job_template(job))
+def test_a_frame_list_makes_one_task_per_listed_frame_or_chunk_of_them(tmp_path):
+    job = replace(farm_job(tmp_path), frames="1-3,8", frames_per_task=1)
+    template = decoded(job_template(job))
     params = preprocess_job_parameters(job_template=template,
                                        job_parameter_values=openjd_values(parameter_values(job)),
                                        job_template_dir=tmp_path, current_working_dir=tmp_path)
@@ -80,6 +82,9 @@ def test_a_frame_list_makes_one_task_per_listed_frame(tmp_path):
     frames = [t["Frame"].value for t in StepParameterSpaceIterator(space=steps[0].parameterSpace)]
     assert frames == ["1", "2", "3", "8"]
     assert len(list(StepParameterSpaceIterator(space=steps[1].parameterSpace))) == 4 * 4
+    chunked = job_tasks(decoded(job_template(replace(job, frames_per_task=2))),
+                        openjd_values(parameter_values(replace(job, frames_per_task=2))), tmp_path)
+    assert [t["Frame"] for t in chunked["Maps"]] == ["1,2", "3,8"] and len(chunked["Tiles"]) == 2 * 4
 
 
 def test_the_job_environment_embeds_the_setup_script_and_passes_every_parameter(tmp_path):
@@ -94,9 +99,9 @@ def test_the_job_environment_embeds_the_setup_script_and_passes_every_parameter(
         assert args[args.index(flag) + 1] == f"{{{{Param.{name}}}}}"
     values = openjd_values(parameter_values(job))
     assert values["WorkerSetup"] == "pip" and values["XslRenderPackage"] == "/wheels/x.whl"
-    decoded = decode_job_template(template=template)
     with pytest.raises(ValueError):
-        preprocess_job_parameters(job_template=decoded, job_parameter_values={**values, "WorkerSetup": "apt"},
+        preprocess_job_parameters(job_template=decoded(template),
+                                  job_parameter_values={**values, "WorkerSetup": "apt"},
                                   job_template_dir=tmp_path, current_working_dir=tmp_path)
     with pytest.raises(Exception, match="--worker-setup"):
         job_template(replace(job, worker=WorkerSetup(setup="apt")))

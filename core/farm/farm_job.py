@@ -30,12 +30,20 @@ MIN_FARM_TIME_BUDGET = 0.001
 DEVICES = ("CPU", "GPU")
 #: The task command when the bundle names none: whatever the worker's PATH finds.
 EXECUTABLE = "xsl-render"
-#: A selective task's timeout unless --task-timeout says otherwise: a frame's maps or a
-#: share of its tiles at film resolution take minutes; twelve hours catches only a hang.
+#: A selective task's timeout per frame of its chunk unless --task-timeout says otherwise: a
+#: frame's maps or a share of its tiles at film resolution take minutes; twelve hours catches
+#: only a hang.
 DEFAULT_TASK_TIMEOUT = 12 * 3600
 #: A guided frame's timeout is its budget plus this (Blender starting, the .blend loading,
 #: the volumes' octree, the files written) plus the budget again, in case the machine is slow.
 GUIDED_OVERHEAD = 900
+#: Frames one task renders in one Blender process (Open Job Description's task chunks): the
+#: scene is opened and Cycles syncs it once per chunk, not once per frame (3.5 s of
+#: heterogeneous fog's octree on balls_b, where a later frame of the session syncs in 0.05 s).
+DEFAULT_FRAMES_PER_TASK = 8
+#: More frames a task than this is a submission mistake: a task is what a farm retries,
+#: cancels and shows, and one of a thousand frames is already a long one.
+MAX_FRAMES_PER_TASK = 1000
 
 
 def parse_frames(text: str) -> str:
@@ -44,8 +52,15 @@ def parse_frames(text: str) -> str:
 
 
 def guided_timeout(time_budget: float) -> int:
-    """Seconds a guided frame's task may take: twice its budget and a fixed allowance."""
+    """Seconds a guided frame may take: twice its budget and a fixed allowance."""
     return int(math.ceil(2 * time_budget)) + GUIDED_OVERHEAD
+
+
+def check_frames_per_task(count: int) -> int:
+    """``count`` if it is a sensible number of frames per task, else InputError."""
+    if not 1 <= count <= MAX_FRAMES_PER_TASK:
+        raise InputError(f"--frames-per-task must be between 1 and {MAX_FRAMES_PER_TASK} (got {count})")
+    return count
 
 
 @dataclass(frozen=True)
@@ -63,17 +78,19 @@ class FarmJob:
     executable: str = EXECUTABLE    # the xsl-render command on the farm's machines
     guided: GuidedOptions | None = None     # the time budget and its options (guided only)
     device: str = "CPU"             # the Cycles device of every render
-    task_timeout: int | None = None     # seconds; None: DEFAULT_TASK_TIMEOUT, or guided_timeout
+    task_timeout: int | None = None     # seconds a task; None: a frame's allowance x frames_per_task
     worker: WorkerSetup = field(default_factory=WorkerSetup)
+    frames_per_task: int = DEFAULT_FRAMES_PER_TASK     # frames a task renders in one process
 
     @property
     def timeout(self) -> int:
-        """Seconds each rendering task may run before the farm cancels it."""
+        """Seconds each task may run before the farm cancels it: ``task_timeout``, else a
+        frame's allowance times ``frames_per_task`` (a chunk of that many frames)."""
         if self.task_timeout is not None:
             return self.task_timeout
         if self.mode == GUIDED and self.guided is not None:
-            return guided_timeout(self.guided.time_budget)
-        return DEFAULT_TASK_TIMEOUT
+            return guided_timeout(self.guided.time_budget) * self.frames_per_task
+        return DEFAULT_TASK_TIMEOUT * self.frames_per_task
 
     def check(self) -> "FarmJob":
         if self.mode not in MODES:
@@ -92,6 +109,7 @@ class FarmJob:
         self.options.check_frame(width, height)
         self.map_options.validate()
         check_groups(self.tasks_per_frame)
+        check_frames_per_task(self.frames_per_task)
         parse_frames(self.frames)
         if self.device not in DEVICES:
             raise InputError(f"--device must be one of {', '.join(DEVICES)} (got '{self.device}')")

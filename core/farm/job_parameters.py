@@ -14,7 +14,8 @@ from ..maps.director import OPERATORS
 from ..maps.options import MapOptions
 from ..sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET, UNBOUNDED_SPP
 from ..sampling.render_options import MIN_TILE_SIZE
-from .farm_job import DEVICES, GUIDED, MIN_FARM_TIME_BUDGET, NO_CEILING, SELECTIVE_MODES, FarmJob
+from .farm_job import (DEVICES, GUIDED, MAX_FRAMES_PER_TASK, MIN_FARM_TIME_BUDGET, NO_CEILING,
+                       SELECTIVE_MODES, FarmJob)
 from .task_groups import MAX_GROUPS
 from .worker_environment import worker_parameters
 
@@ -91,8 +92,14 @@ def _map_parameters(m: MapOptions) -> list[dict]:
 
 
 def _farm_parameters(job: FarmJob) -> list[dict]:
-    """The device, the xsl-render command and how a worker gets it."""
+    """Frames per task, the device, the xsl-render command and how a worker gets it."""
     return [
+        _number("FramesPerTask", "INT", job.frames_per_task, None, "Frames each task renders in "
+                "one Blender process, Cycles syncing the scene once for all of them (Open Job "
+                "Description spreads the frames evenly over as many tasks as this needs). The "
+                "tasks' timeout was fixed with the bundle for its own value: write the bundle "
+                "again (--frames-per-task) to raise it far.", _FARM, "Frames per task", low=1,
+                high=MAX_FRAMES_PER_TASK),
         _choice("Device", job.device, DEVICES, "--device", "Cycles device of every render. The "
                 "steps' host requirements (a GPU or not) were fixed with the bundle: write it "
                 "again to change device.", _FARM, "Cycles device"),

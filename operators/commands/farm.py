@@ -1,7 +1,8 @@
 """``xsl-render farm SCENE.blend --bundle DIR``: an Open Job Description job bundle.
 
-Writes DIR/template.yaml (steps Maps, Tiles and Composite for xs and xsl; one step Render,
-a task per frame, for ``--mode guided --time-budget SECONDS``; see ``core.farm.job_template``),
+Writes DIR/template.yaml (steps Maps, Tiles and Composite for xs and xsl; one step Render
+for ``--mode guided --time-budget SECONDS``; every task renders a chunk of ``--frames-per-task``
+frames in one Blender process; see ``core.farm.job_template``),
 DIR/parameter_values.yaml, DIR/asset_references.yaml (the .blend and every file it reads:
 ``addon.scene.external_files``), DIR/worker_requirements.txt (the pinned versions a worker
 installs: ``core.farm.worker_requirements``) and our marker file. Submit DIR to a farm that
@@ -16,6 +17,7 @@ import sys
 from pathlib import Path
 
 from ...core.errors import InputError
+from ...core.farm.farm_job import DEFAULT_FRAMES_PER_TASK, MAX_FRAMES_PER_TASK
 from ...core.farm.worker_environment import WorkerSetup
 from ...core.farm.worker_setup import SETUPS
 from . import argtypes
@@ -50,6 +52,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--tasks-per-frame", type=int, default=None,
                         help="xs, xsl: tile tasks per frame, sharing its rectangles at about equal "
                              f"cost (default {DEFAULT_TASKS_PER_FRAME})")
+    parser.add_argument("--frames-per-task", metavar="N", type=argtypes.integer(1, MAX_FRAMES_PER_TASK),
+                        default=DEFAULT_FRAMES_PER_TASK,
+                        help="frames each task renders in one Blender process, the scene synced "
+                             f"once for all (default {DEFAULT_FRAMES_PER_TASK}; parameter "
+                             "FramesPerTask; the tasks' timeout is made for this many)")
     parser.add_argument("--output", metavar="DIR",
                         help="where the job writes its frames (default: DIR/output of the bundle)")
     parser.add_argument("--executable", metavar="PATH",
@@ -59,8 +66,9 @@ def add_arguments(parser) -> None:
                         help="Cycles device of the renders; GPU makes the rendering steps ask for "
                              "a GPU in their host requirements (default: the scene's device)")
     parser.add_argument("--task-timeout", metavar="SECONDS", type=argtypes.integer(1, MAX_TIMEOUT),
-                        help="seconds a task may run before the farm cancels it (default: twice "
-                             "the time budget plus 15 minutes for guided, 12 hours otherwise)")
+                        help="seconds a task may run before the farm cancels it (default: for "
+                             "each frame of a task, twice the time budget plus 15 minutes for "
+                             "guided, 12 hours otherwise)")
     parser.add_argument("--worker-setup", choices=SETUPS, default="none",
                         help="how a worker gets xsl-render: none (installed, on PATH; default), "
                              "pip or conda (installed by the job's environment, once per worker)")
@@ -131,7 +139,7 @@ def run(args) -> int:
         options = guided_render_options(guided, args.seed, resolution or render_size(scene))
         what = (f"guided within {guided.time_budget:g} s per frame "
                 + ("without a ceiling" if guided.max_spp is None else f"up to {guided.max_spp} spp")
-                + f", importance {guided.importance}, one task per frame")
+                + f", importance {guided.importance}")
     else:
         max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)
         options = tile_options(args, max_spp, resolution or render_size(scene))
@@ -141,7 +149,8 @@ def run(args) -> int:
                   output=_output(args, bundle), mode=args.mode, map_options=map_options,
                   options=options, tasks_per_frame=tasks_per_frame,
                   executable=args.executable or "xsl-render", guided=guided, device=device,
-                  task_timeout=args.task_timeout, worker=worker).check()
+                  task_timeout=args.task_timeout, worker=worker,
+                  frames_per_task=args.frames_per_task).check()
     files = external_files()
     assets = asset_references(scene_path, files, bundle / job.output)
     write_bundle(bundle, job_template(job), parameter_values(job),
@@ -153,7 +162,8 @@ def run(args) -> int:
     if Path(job.output).is_absolute():
         command += ["-p", f"OutputDir={job.output}"]
     print(f"wrote {bundle}/template.yaml and parameter_values.yaml: frames {frames}, "
-          f"{width}x{height}, {what}, on the {device}; {len(files.found)} file(s) the scene reads "
+          f"{width}x{height}, {what}, up to {job.frames_per_task} frame(s) a task, on the "
+          f"{device}; {len(files.found)} file(s) the scene reads "
           f"in asset_references.yaml; run here with: {shlex.join(command)}")
     return 0
 
