@@ -129,24 +129,40 @@ def test_auto_takes_the_largest_rate_within_the_noise():
     assert choose_step_rate(measures.get, spp=64).step_rate == 0.5
     assert choose_step_rate(measures.get, spp=16, largest=0.5).step_rate == 0.5
     never = choose_step_rate(lambda rate: 1.0, spp=16)
-    assert never.biased is False and "above" in never.reason
+    assert never.biased is False and "within" in never.reason
     assert set(never.to_dict()["tried"]) == {"4", "2", "1", "0.5", "0.25"}
 
 
-@pytest.mark.parametrize("measure_2, previous, expected", [
-    (0.011, None, 2.0),                 # a first frame: rate 2 is within 0.0125
-    (0.011, (True, 1.0), 1.0),          # after rate 1: 2 must pass 0.7 x 0.0125, it does not
-    (0.008, (True, 1.0), 2.0),          # ... and now it does
-    (0.011, (True, 2.0), 2.0),          # the previous rate itself needs only the tolerance
-    (0.013, (True, 2.0), 1.0),          # it fails: the finer rate at once
-    (0.011, (False, None), 1.0),        # after null scattering every rate is coarser
+@pytest.mark.parametrize("measure_2, previous, expected, asked", [
+    (0.011, None, 2.0, [4.0, 2.0]),             # a first frame: rate 2 is within 0.0125
+    (0.011, (True, 1.0), 1.0, [1.0, 2.0]),      # after rate 1: 2 must pass 0.7 x 0.0125, it does not
+    (0.008, (True, 1.0), 2.0, [1.0, 2.0, 4.0]),  # ... and now it does (4 is tried, fails)
+    (0.011, (True, 2.0), 2.0, [2.0, 4.0]),      # the previous rate itself needs only the tolerance
+    (0.013, (True, 2.0), 1.0, [2.0, 1.0]),      # it fails: the finer rate at once
+    (0.011, (False, None), 1.0, [0.25, 0.5, 1.0, 2.0]),  # after null scattering: up from the finest
 ])
-def test_auto_keeps_the_previous_frames_rate_unless_clearly_wrong(measure_2, previous, expected):
+def test_auto_keeps_the_previous_frames_rate_unless_clearly_wrong(measure_2, previous, expected, asked):
     from xsl_render.core.sampling.volume_estimator import EstimatorChoice
 
     measures = {4.0: 0.30, 2.0: measure_2, 1.0: 0.005, 0.5: 0.004, 0.25: 0.001}
+    calls = []
+
+    def measure(rate):
+        calls.append(rate)
+        return measures[rate]
+
     before = None if previous is None else EstimatorChoice("auto", biased=previous[0], step_rate=previous[1])
-    assert choose_step_rate(measures.get, spp=16, previous=before).step_rate == expected
+    assert choose_step_rate(measure, spp=16, previous=before).step_rate == expected
+    assert calls == asked
+
+
+def test_auto_after_null_scattering_asks_only_the_finest_rate_while_it_fails():
+    from xsl_render.core.sampling.volume_estimator import EstimatorChoice
+
+    calls = []
+    choice = choose_step_rate(lambda rate: calls.append(rate) or 0.0125, spp=16,
+                              previous=EstimatorChoice("auto", biased=False))
+    assert choice.biased is False and calls == [0.25]     # within the tolerance, not the margin
 
 
 def test_visible_bias_is_relative_to_what_the_transmittance_can_move():

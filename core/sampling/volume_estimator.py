@@ -135,27 +135,55 @@ def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
     (the small rates cost the most to predict). ``largest`` caps the rates tried (a step
     rate given with ``auto``).
 
-    ``previous``: the choice made for the frame before (an animation). A rate coarser than
-    that one must pass ``SWITCH_MARGIN`` times the tolerance, so that a measure wavering
-    around the tolerance does not switch the step, and with it the bias, from frame to frame
-    (a static part of the frame would flicker); a finer rate is taken as soon as the
-    previous one fails.
+    ``previous``: the choice made for the frame before (an animation). The search then starts
+    from it and moves one rate at a time (the bias grows with the step, so the first rate
+    that passes going up, or fails going down, settles it; a frame costs one or two
+    predictions instead of up to five). A rate coarser than the previous one must pass
+    ``SWITCH_MARGIN`` times the tolerance, so that a measure wavering around the tolerance
+    does not switch the step, and the bias with it, from frame to frame (a static part of the
+    frame would flicker); a finer rate is taken as soon as the previous one fails.
     """
     tolerance = tolerated_bias(spp)
+    ordered = sorted((r for r in rates if largest is None or r <= largest), reverse=True)
+    sticky = previous is not None and previous.estimator == "auto" and previous.biased is not None \
+        and (not previous.biased or previous.step_rate in ordered)
+    if not sticky:
+        return _first_passing(measure_at, ordered, tolerance, spp, {})
     tried: dict = {}
-    sticky = previous is not None and previous.estimator == "auto" and previous.biased is not None
-    for rate in sorted((r for r in rates if largest is None or r <= largest), reverse=True):
+    # Index of the previous choice; null scattering sits below the finest rate.
+    start = ordered.index(previous.step_rate) if previous.biased else len(ordered)
+    if start < len(ordered):
+        tried[ordered[start]] = measure_at(ordered[start])
+        if tried[ordered[start]] > tolerance:          # it fails now: finer rates, as usual
+            return _first_passing(measure_at, ordered[start + 1:], tolerance, spp, tried)
+    best = start
+    for index in range(start - 1, -1, -1):              # coarser, with the margin
+        tried[ordered[index]] = measure_at(ordered[index])
+        if tried[ordered[index]] > SWITCH_MARGIN * tolerance:
+            break
+        best = index
+    if best == len(ordered):
+        return _null_scattering(tolerance, tried, spp)
+    rate = ordered[best]
+    kept = " (the previous frame's)" if best == start else ""
+    return _marching(rate, tried, tolerance, spp, kept)
+
+
+def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dict) -> EstimatorChoice:
+    for rate in ordered:
         tried[rate] = measure_at(rate)
-        coarser = sticky and (not previous.biased
-                              or (previous.step_rate is not None and rate > previous.step_rate))
-        allowed = tolerance * (SWITCH_MARGIN if coarser else 1.0)
-        if tried[rate] <= allowed:
-            kept = " (the previous frame's)" if sticky and previous.biased \
-                and previous.step_rate == rate else ""
-            return EstimatorChoice("auto", biased=True, step_rate=rate, predicted_bias=tried[rate],
-                                   tolerance=tolerance, tried=tried,
-                                   reason=f"predicted bias {tried[rate]:.2%} <= {allowed:.2%} "
-                                          f"at {spp:g} spp{kept}")
+        if tried[rate] <= tolerance:
+            return _marching(rate, tried, tolerance, spp)
+    return _null_scattering(tolerance, tried, spp)
+
+
+def _marching(rate: float, tried: dict, tolerance: float, spp: float, note: str = "") -> EstimatorChoice:
+    return EstimatorChoice("auto", biased=True, step_rate=rate, predicted_bias=tried[rate],
+                           tolerance=tolerance, tried=tried,
+                           reason=f"predicted bias {tried[rate]:.2%} <= {tolerance:.2%} at {spp:g} spp{note}")
+
+
+def _null_scattering(tolerance: float, tried: dict, spp: float) -> EstimatorChoice:
     return EstimatorChoice("auto", biased=False, tolerance=tolerance, tried=tried,
-                           reason=f"every step rate's predicted bias is above {tolerance:.2%} "
+                           reason=f"no step rate tried has a predicted bias within {tolerance:.2%} "
                                   f"at {spp:g} spp")
