@@ -13,13 +13,13 @@ drives them in one go, the panel one step per timer tick.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 from ..core.maps.files import MapSet
 from ..core.maps.options import MapOptions
 from ..core.progress import Steps, scaled_steps, timed_steps
-from ..core.sampling.guided_plan import GuidedOptions
+from ..core.sampling.guided_plan import GuidedOptions, SequenceBudget
 from ..core.sampling.render_options import RenderOptions
 from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
@@ -137,11 +137,14 @@ def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
 
 
 def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options: RenderOptions,
-                 cache_dir=None) -> FrameJob:
+                 cache_dir=None, sequence: SequenceBudget | None = None) -> FrameJob:
     """A frame job for the guided render within ``guided.time_budget``: the importance map
     it asks for first (rays cached in ``cache_dir``), inside the budget (its seconds, not the
     time spent waiting between steps, are passed on as spent), then the guided render. The
-    command line, the farm and the panel all render guided frames through this job."""
+    command line, the farm and the panel all render guided frames through this job.
+
+    ``sequence``: the frames of one run share its time (``SequenceBudget``: each frame gets
+    what the range has left per frame still to render, the scene sync outside it)."""
     guided.check()
 
     def prepare(scene) -> Steps[tuple]:
@@ -151,7 +154,12 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 
     def render(scene, prepared) -> Steps[FrameResult]:
         importance, map_seconds = prepared if prepared is not None else (None, 0.0)
-        outcome = yield from guided_steps(scene, options, guided, importance, map_seconds)
+        frame_guided = guided if sequence is None else replace(guided, time_budget=sequence.next_budget())
+        outcome = yield from guided_steps(scene, options, frame_guided, importance, map_seconds,
+                                          sync_outside=sequence is not None)
+        if sequence is not None:
+            sequence.record(outcome.stats["wall_s"])
+            outcome.stats["sequence_budget"] = sequence.to_dict()
         return FrameResult(scene.frame_current, outcome)
 
     if guided.importance == "none":

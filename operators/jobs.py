@@ -81,6 +81,7 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     budget (its importance map computed first, inside the budget; every frame of an
     animation gets its own budget)."""
     from ..addon.animation import estimated_frame, guided_frame, selective_frame
+    from ..core.sampling.guided_plan import SequenceBudget
     from ..addon.maps.estimator_choice import estimator_spp
 
     settings = scene.xsl_render
@@ -88,8 +89,11 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     if uses_budget(settings):
         guided = guided_options(settings)
         label, mode = "Guided render", "guided"
+        # An animation's frames share its time (the first frame's scene sync paid back by the rest).
+        sequence = SequenceBudget(guided.time_budget, len(animation_frames(scene))) if animation else None
         frame_job = estimated_frame(
-            lambda chosen: guided_frame(guided, map_options(settings), chosen, ray_cache_dir(scene)),
+            lambda chosen: guided_frame(guided, map_options(settings), chosen, ray_cache_dir(scene),
+                                        sequence),
             options, estimator_spp(mode, options, {"guided": guided}))
     else:
         mode = settings.director.lower()
@@ -189,6 +193,11 @@ def render_report(stats: dict) -> str:
             f"{stats['wall_s']:.1f} s")
 
 
+def animation_frames(scene) -> range:
+    """The frames the panel's animation render renders: the scene's range and step."""
+    return range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step))
+
+
 def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: bool) -> Job:
     """The scene's frame range, each frame written as a numbered EXR as soon as it is done."""
     import bpy
@@ -202,7 +211,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
     pattern = bpy.path.abspath(filepath or scene.render.filepath)
     if not pattern:
         raise InputError("no output path for the frames: set one in the panel or in Output properties")
-    frames = range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step))
+    frames = animation_frames(scene)
     check_outputs([frame_path(pattern, frame) for frame in frames])
     # frames_steps removes datablocks made during the run, so the images exist beforehand.
     width, height = render_size(scene)

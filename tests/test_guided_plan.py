@@ -187,3 +187,23 @@ def test_merge_refuses_gaps_and_bad_passes():
         merged.add((0, 3, 0, 4), np.ones((3, 4, 1)), 1)
     with pytest.raises(ValueError):
         merged.add((0, 1, 0, 4), np.ones((1, 4, 1)), -1)
+
+
+def test_a_sequence_pays_its_first_frames_sync_back_over_the_rest():
+    from xsl_render.core.sampling.guided_plan import SequenceBudget
+
+    sequence = SequenceBudget(per_frame=2.0, frames=5)
+    assert sequence.next_budget() == 2.0                 # the first frame: its sync comes on top
+    sequence.record(2.0 + 4.0)                           # ... 4 s of octree
+    assert sequence.next_budget() == pytest.approx(1.0)  # (10 - 6) / 4
+    for _ in range(4):
+        sequence.record(sequence.next_budget())
+    assert sequence.spent == pytest.approx(10.0)         # the range kept its 5 x 2 s
+
+
+def test_a_sequence_never_starves_a_frame():
+    from xsl_render.core.sampling.guided_plan import MIN_FRAME_SHARE, SequenceBudget
+
+    sequence = SequenceBudget(per_frame=2.0, frames=2)
+    sequence.record(9.0)
+    assert sequence.next_budget() == MIN_FRAME_SHARE * 2.0

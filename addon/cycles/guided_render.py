@@ -3,7 +3,8 @@
 
 1. Importance, when asked for: the X, XS or XSL director map, computed by the caller
    (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
-2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else.
+2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else
+   (outside it for a frame of an animation, whose sequence pays it back: ``sync_outside``).
 3. Pilot: the whole frame at a quarter of its resolution, at most 16 samples, for at most a
    small share of the budget (Cycles' own time limit; the count is read back from Cycles).
 4. Scores: the pilot denoised, its display luminance's gradient per tile
@@ -98,8 +99,13 @@ def render_guided(scene, options: RenderOptions, guided: GuidedOptions,
 
 
 def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
-                 importance: np.ndarray | None = None, map_seconds: float = 0.0) -> Steps[RenderOutcome]:
-    """``render_guided`` as steps (``core.progress``); closing it restores the scene."""
+                 importance: np.ndarray | None = None, map_seconds: float = 0.0,
+                 sync_outside: bool = False) -> Steps[RenderOutcome]:
+    """``render_guided`` as steps (``core.progress``); closing it restores the scene.
+
+    ``sync_outside``: the scene sync's seconds are added to the budget instead of taken from
+    it (a frame of an animation: ``core.sampling.guided_plan.SequenceBudget`` charges them
+    to the frames after it, which find the scene synced)."""
     guided.check()
     budget = guided.time_budget
     # Auto's estimator prediction ran before, inside the budget like the importance map.
@@ -121,6 +127,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             row, col = (height - side) // 2, (width - side) // 2
             renderer.render((row, row + side, col, col + side), 1)
             phases["sync"] = clock.now() - began
+            if sync_outside:
+                budget += phases["sync"]
 
             # The pilot: a quarter of the resolution, a first sample timing it, then as many
             # as its share allows. (No Cycles time limit: a limit set and unset at the same
@@ -192,7 +200,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
     stats["wall_s"] = sum(phases.values())
-    stats.update(time_budget_s=budget, guided=guided.to_dict(), pilot_spp=have,
+    if sync_outside:
+        stats["sync_outside_budget_s"] = phases["sync"]
+    stats.update(time_budget_s=guided.time_budget, guided=guided.to_dict(), pilot_spp=have,
                  pilot_seconds=pilot.seconds, pilot_resolution_divisor=reduce,
                  seconds_per_pixel_sample=rate,
                  final_pass=final.to_dict(),

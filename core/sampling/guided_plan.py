@@ -269,3 +269,42 @@ class BudgetPacer:
             return 1.0
         usable = time_left - self.overhead * renders
         return float(min(self.max_scale, max(0.0, usable / planned)))
+
+
+#: A frame of a guided animation is never given less than this share of the per-frame budget,
+#: whatever the frames before it overran (a short sequence with a long first sync overruns
+#: its total instead of starving its frames).
+MIN_FRAME_SHARE = 0.5
+
+
+@dataclass
+class SequenceBudget:
+    """The time of a guided animation: ``per_frame`` seconds a frame, ``per_frame x frames``
+    for the whole range.
+
+    The first frame syncs the scene (seconds for heterogeneous fog: Blender 5 builds its
+    volume octree), the others find it synced (one Cycles session for the range). Charging
+    that sync to the first frame alone would leave it a pilot and hardly a sample; here a
+    frame renders for what the range has left divided by the frames still to render, its
+    sync outside that, so the first frame renders like the others and the rest pay its sync
+    back. (Mutable: one per run, ``record`` after each frame.)
+    """
+
+    per_frame: float
+    frames: int
+    spent: float = 0.0
+    done: int = 0
+
+    def next_budget(self) -> float:
+        """Seconds for the next frame, its scene sync not included."""
+        left = self.per_frame * self.frames - self.spent
+        remaining = max(1, self.frames - self.done)
+        return max(MIN_FRAME_SHARE * self.per_frame, left / remaining)
+
+    def record(self, seconds: float) -> None:
+        """A frame took ``seconds`` (wall, its sync included)."""
+        self.spent += float(seconds)
+        self.done += 1
+
+    def to_dict(self) -> dict:
+        return asdict(self)

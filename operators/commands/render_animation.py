@@ -28,6 +28,7 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
     from ...addon.maps.estimator_choice import estimator_spp
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
+    from ...core.sampling.guided_plan import SequenceBudget
     from ...core.maps.files import write_map_set
     from ...core.maps.xmap import XMapWarning
     from ...core.progress import run_steps
@@ -39,11 +40,13 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
     save_maps = Path(args.save_maps) if args.save_maps else None
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
 
+    sequence = SequenceBudget(budget["guided"].time_budget, len(frames)) if args.mode == "guided" else None
+
     def frame_job(frame_options):
         if args.mode in ("xs", "xsl"):
             return selective_frame(budget["compute_maps"], frame_options, args.mode, cache_dir)
         if args.mode == "guided":
-            return guided_frame(budget["guided"], budget["map_options"], frame_options, cache_dir)
+            return guided_frame(budget["guided"], budget["map_options"], frame_options, cache_dir, sequence)
         return single_render_frame(lambda s: render_baseline(s, args, frame_options, budget), args.mode)
 
     job = estimated_frame(frame_job, options, estimator_spp(args.mode, options, budget))
