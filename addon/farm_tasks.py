@@ -27,6 +27,7 @@ from __future__ import annotations
 import os
 import shutil
 import socket
+import tempfile
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -255,12 +256,14 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
                     guided: GuidedOptions, map_options: MapOptions, options: RenderOptions,
                     device: str | None = None, progress: ProgressCallback | None = None) -> list[TaskOutcome]:
     """Render each of ``frames`` whose files are not finished for the same inputs with the
-    guided sampler, each within ``guided.time_budget`` (its importance map inside the
-    budget), one after another in one Cycles session (``animation.frames_steps``); write each
-    frame's image, samples and statistics as one set (``core.farm.frame_outputs``) as soon as
-    it is rendered. ``options``: the resolution, seed and denoising; its ``max_spp`` the
-    ceiling the statistics report. A frame's ``warnings`` hold its render's (a budget
-    overrun among them)."""
+    guided sampler, one after another in one Cycles session (``animation.frames_steps``),
+    as ``xsl-render render --mode guided --frames`` does: the frames rendered share
+    ``guided.time_budget`` each (``SequenceBudget``: the first one's scene sync is paid back
+    by the others), a frame's importance map inside its share, camera rays kept for the next
+    frame. Each frame's image, samples and statistics are written as one set
+    (``core.farm.frame_outputs``) as soon as it is rendered. ``options``: the resolution,
+    seed and denoising; its ``max_spp`` the ceiling the statistics report. A frame's
+    ``warnings`` hold its render's (a budget overrun among them)."""
     from .scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
@@ -279,6 +282,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     todo = [frame for frame in frames if frame not in outcomes]
     if todo:
         from ..core.progress import run_steps, scaled_steps
+        from ..core.sampling.guided_plan import SequenceBudget
         from .animation import estimated_frame, frames_steps, guided_frame
         from .maps.estimator_choice import estimator_spp
 
@@ -296,8 +300,13 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
                                                  seconds=stats["wall_s"], stats=stats)
 
         scene = _open(scene_path, scene_name, todo[0], device)
-        job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen), options,
-                              estimator_spp("guided", options, {"guided": guided}))
-        run_steps(scaled_steps(frames_steps(scene, todo, job, on_frame),
-                               1.0 - len(todo) / len(frames), 1.0), progress)
+        sequence = SequenceBudget(guided.time_budget, len(todo))
+        rays = Path(tempfile.mkdtemp(prefix="xsl-rays-"))
+        try:
+            job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen, rays, sequence),
+                                  options, estimator_spp("guided", options, {"guided": guided}))
+            run_steps(scaled_steps(frames_steps(scene, todo, job, on_frame),
+                                   1.0 - len(todo) / len(frames), 1.0), progress)
+        finally:
+            shutil.rmtree(rays, ignore_errors=True)
     return [outcomes[frame] for frame in frames]

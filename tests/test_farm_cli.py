@@ -290,7 +290,11 @@ def test_guided_bundle_renders_a_chunk_in_one_process_and_a_rerun_renders_only_m
         files = FrameFiles(bundle / "output", frame)
         assert f"frame {frame}: {files.image} written: 64x36" in run.stdout
         stats = json.loads(files.stats.read_text())
-        assert stats["mode"] == "guided" and stats["time_budget_s"] == GUIDED_BUDGET
+        assert stats["mode"] == "guided" and stats["inputs_detail"]["guided"]["time_budget"] == GUIDED_BUDGET
+        # The chunk's frames share its time as `render --frames` does: 1.5 s a frame in all.
+        assert stats["sequence_budget"]["per_frame"] == GUIDED_BUDGET
+        assert stats["sequence_budget"]["frames"] == 3 and stats["sequence_budget"]["done"] == frame
+        assert stats["time_budget_s"] >= GUIDED_BUDGET / 2
         assert stats["inputs_detail"]["guided"]["importance"] == "x" and stats["seed"] == 3
         assert stats["inputs_detail"]["map_options"]["minbound"] is True
         assert stats["phases_s"]["maps"] > 0.0 and stats["mean_spp"] > stats["pilot_spp"] >= 1
@@ -327,6 +331,7 @@ def test_guided_bundle_renders_a_chunk_in_one_process_and_a_rerun_renders_only_m
         assert f"frame {frame}: {files.image} written" in resumed.stdout
         stats = json.loads(files.stats.read_text())
         assert stats["task"]["frames"] == [1, 2, 3] and stats["task"]["pid"] not in tasks
+        assert stats["sequence_budget"]["frames"] == 2             # the two it rendered share time
 
 
 @pytest.mark.parametrize("command,args,message", [

@@ -243,7 +243,7 @@ def _guided(args) -> int:
         sync = stats.get("cycles_sync_s")
         print(f"frame {outcome.frame}: {FrameFiles(Path(args.output), outcome.frame).image} {state}: "
               f"{stats['resolution'][0]}x{stats['resolution'][1]}, mean {stats['mean_spp']:.2f} spp in "
-              f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of a {guided.time_budget:g} s budget"
+              f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of its {stats['time_budget_s']:.2f} s budget"
               + ("" if sync is None else f", Cycles sync {sync:.2f} s"))
     done = sum(len(outcome.done_now) for outcome in outcomes)
     print(f"{_chunk(frames)}: {done} rendered now, {len(outcomes) - done} already done")
