@@ -26,9 +26,9 @@ A selective job (``xs``, ``xsl``: the paper) has three steps, each a command of 
    denoiser) and a task for the farm to schedule. Depends on Maps and Tiles.
 
 A guided job (``xsl-render render --mode guided``) has one step, ``Render``: one task per
-chunk renders its frames one after another, each within the time budget (``xsl-render
-farm-task guided``). A frame's passes follow the clock of one process, so a frame is not
-split between tasks; frames are.
+chunk renders its frames one after another within the time budget per frame, sharing the
+chunk's time as ``render --frames`` does (``xsl-render farm-task guided``). A frame's passes
+follow the clock of one process, so a frame is not split between tasks; frames are.
 
 Every knob is a job parameter (a farm's submitter shows them as a form; the values chosen
 are recorded with the job): the scene file (a PATH, so the farm can map it between machines),
@@ -108,8 +108,8 @@ def job_template(job: FarmJob) -> dict:
                     "Rendering of participating media with Blender Cycles within a time budget per "
                     "frame: a pilot pass, the rest of the budget where the denoised frame keeps its "
                     "error (xsl-render render --mode guided).", [
-                        _step(job, "Render", "Each task renders a chunk of frames, each within the time "
-                              "budget, in one Blender process.",
+                        _step(job, "Render", "Each task renders a chunk of frames in one Blender process, "
+                              "within the time budget per frame.",
                               _frame_space(), "guided", "{{Param.SceneFile}}", *frame,
                               *task_arguments(parameters), renders=True)])
     groups = "{{Param.TasksPerFrame}}"
