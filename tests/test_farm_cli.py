@@ -215,6 +215,19 @@ def test_later_frames_of_a_tile_chunk_skip_the_fogs_scene_sync(cli, blender, tmp
     assert synced[0] > 0.3 and synced[1] + synced[2] < 0.1 * synced[0], synced
 
 
+@pytest.mark.render
+def test_a_maps_chunk_of_a_still_shot_casts_the_camera_rays_once(cli, tmp_path):
+    output = tmp_path / "job"
+    result = cli("farm-task", "maps", ROAD, "--scene-name", "road", "--frames", "1-2", "--output", output,
+                 "--mode", "xs", *CHUNK)
+    assert result.returncode == 0, result.stderr
+    plans = [valid_plan(FrameFiles(output, frame)) for frame in (1, 2)]
+    assert [plan.data["ray_cache_hit"] for plan in plans] == [False, True]
+    assert all((FrameFiles(output, frame).maps / "zcache.npz").is_file() for frame in (1, 2))
+    np.testing.assert_array_equal(read_image(FrameFiles(output, 1).maps / "x.exr"),
+                                  read_image(FrameFiles(output, 2).maps / "x.exr"))
+
+
 def test_refuses_a_folder_that_is_not_ours_and_rewrites_our_own(cli, tmp_path):
     foreign = tmp_path / "thesis"
     foreign.mkdir()
