@@ -25,9 +25,10 @@ reached by extending the end segment's log-log slope; the result is then marked
 
 Direction
 ---------
-FLIP and MSE are errors (lower is better). ColorVideoVDP's JOD is a quality (higher is
-better; 10 means no visible difference): it is read as the error ``10 - JOD``, the JOD drop,
-which is 0 for an image identical to the reference and grows with the difference.
+FLIP, MSE and the flicker of a frame sequence are errors (lower is better). ColorVideoVDP's
+JOD is a quality (higher is better; 10 means no visible difference): it is read as the error
+``10 - JOD``, the JOD drop, which is 0 for an image identical to the reference and grows with
+the difference.
 """
 from __future__ import annotations
 
@@ -35,7 +36,9 @@ import math
 from dataclasses import dataclass
 
 #: Metrics read along curves, and whether their value is an error (lower is better).
-LOWER_IS_BETTER = {"flip": True, "flip_tile95": True, "flip_share": True, "mse": True, "jod": False}
+#: flicker: a frame sequence's (``core.validation.temporal``), for runs over several frames.
+LOWER_IS_BETTER = {"flip": True, "flip_tile95": True, "flip_share": True, "mse": True, "flicker": True,
+                   "jod": False}
 #: ColorVideoVDP's score for an image identical to the reference.
 JOD_MAX = 10.0
 

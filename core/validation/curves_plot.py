@@ -1,6 +1,7 @@
 """curves.png: the time-quality curves of ``xsl-render curves`` as two log-log panels,
 mean FLIP against seconds and MSE against seconds, one line per curve through the runs'
-medians, every repeat as a small point beside them, the gold standard marked."""
+medians, every repeat as a small point beside them, the gold standard marked. Over frames
+the errors are the means over the frames and the seconds those of the whole run."""
 from __future__ import annotations
 
 import math
@@ -9,6 +10,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..files import atomic_path
+from .curves_results import frame_count
 
 #: Colours and markers per curve (others cycle through matplotlib's defaults).
 STYLES = {"uniform": ("#1f1f1f", "o"), "adaptive": ("#8a5fb0", "s"), "guiding": ("#2a9d8f", "^"),
@@ -24,6 +26,7 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
         from matplotlib.ticker import FuncFormatter
     except ImportError:
         raise InputError("the plot needs matplotlib (install it from requirements.lock)") from None
+    count = frame_count(data)
     figure = Figure(figsize=(12, 5.2), dpi=110)
     axes = figure.subplots(1, 2)
     # Enough distinct colours for a step-rate sweep (six curves) beside the named ones.
@@ -57,7 +60,8 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
                                           (axis.yaxis, metric == "mse", (1, 2, 3, 4, 5, 6, 8))):
             scale.set_major_formatter(FuncFormatter(_tick_label(scientific, digits)))
             scale.set_minor_formatter(FuncFormatter(_tick_label(scientific, digits)))
-        axis.set_xlabel("wall time per frame, s (maps, sync, render, denoise)")
+        axis.set_xlabel(f"wall time of the run over {count} frames, s (maps, sync, renders, denoise)"
+                        if count else "wall time per frame, s (maps, sync, render, denoise)")
         axis.set_ylabel(title)
         axis.grid(True, which="both", alpha=0.25)
         axis.set_title(title, fontsize=10)
@@ -67,7 +71,8 @@ def write_curves_png(data: dict, path: str | os.PathLike) -> Path:
     figure.suptitle(f"{data['scene']['scene']} ({Path(data['scene']['file']).name}) at {size[0]}x{size[1]}, "
                     f"ceiling {data['ceiling']} spp: error against a converged reference of "
                     f"{reference.get('spp', '?')} spp (seed {reference.get('seed', '?')})"
-                    + (f", medians of {data['repeats']} repeats" if data["repeats"] > 1 else ""),
+                    + (f", medians of {data['repeats']} repeats" if data["repeats"] > 1 else "")
+                    + (f"; errors: mean over {count} frames" if count else ""),
                     fontsize=10)
     figure.tight_layout(rect=(0, 0, 1, 0.95))
     path = Path(path)

@@ -11,6 +11,7 @@ from html import escape
 from pathlib import Path
 
 from ..files import write_text
+from .curves_results import frame_count
 from .report_images import data_uri
 from .report_style import CSS
 
@@ -19,7 +20,8 @@ SPEEDUP_NOTE = ("Equal-quality speedup: the time the baseline curve needs to rea
                 "1.00&times; (in bold) the run is faster at equal quality, otherwise it is not. "
                 "<b>*</b> extrapolated beyond the curve's measured range along its end segment.")
 METRIC_LABELS = {"flip": "FLIP", "flip_tile95": "FLIP p95 region", "flip_share": "% FLIP > 0.103",
-                 "mse": "MSE", "jod": "JOD"}
+                 "mse": "MSE", "flicker": "flicker", "jod": "JOD"}
+_FORMATS = {"flip": ".4f", "flip_tile95": ".4f", "flip_share": ".2f", "mse": ".3g", "flicker": ".4f", "jod": ".3f"}
 
 
 def speedup_cell(speedup: dict | None) -> str:
@@ -43,7 +45,9 @@ def curves_table(data: dict) -> str:
     baselines = [name for name, curve in data["curves"].items() if curve["baseline"]]
     metrics = [m for m in data["metrics"] if m != "jod" or any(r.get("jod") is not None
                                                                for r in data["runs"].values())]
-    head = ("<tr><th class=l rowspan=2>run</th><th rowspan=2>time</th><th rowspan=2>mean spp</th>"
+    count = frame_count(data)
+    time_head = f"time of the {count} frames" if count else "time"
+    head = (f"<tr><th class=l rowspan=2>run</th><th rowspan=2>{time_head}</th><th rowspan=2>mean spp</th>"
             + "".join(f"<th rowspan=2>{METRIC_LABELS[m]}</th>" for m in metrics)
             + "".join(f"<th colspan={len(metrics)}>speedup over {escape(data['curves'][b]['label'])}</th>"
                       for b in baselines)
@@ -58,8 +62,7 @@ def curves_table(data: dict) -> str:
                                                      if repeats > 1 else "")
             cells = [f"<td class=l>{escape(run['label'])}</td>", f"<td>{time_cell}</td>",
                      _value(run["mean_spp"], ".1f")]
-            cells += [_value(run[m], {"flip": ".4f", "flip_tile95": ".4f", "flip_share": ".2f", "mse": ".3g",
-                                          "jod": ".3f"}[m]) for m in metrics]
+            cells += [_value(run.get(m), _FORMATS[m]) for m in metrics]
             for baseline in baselines:
                 speedups = run["speedups"].get(baseline)
                 if speedups is None:
@@ -78,9 +81,12 @@ def write_curves_report(data: dict, out_dir: str | os.PathLike, png: str | os.Pa
     inputs = reference.get("inputs", {})
     vdp = data.get("vdp", {})
     png = Path(png)
+    count = frame_count(data)
+    where = f"frame {scene['frame']}" if not count else f"frames {escape(scene.get('frame_range', ''))}"
     body = [
-        f"<h1>Time-quality curves: {escape(scene['scene'])}</h1>",
-        f"<p class=meta>{escape(Path(scene['file']).name)}, frame {scene['frame']}, "
+        f"<h1>Time-quality curves: {escape(scene['scene'])}"
+        + (f", mean over {count} frames" if count else "") + "</h1>",
+        f"<p class=meta>{escape(Path(scene['file']).name)}, {where}, "
         f"{scene['size'][0]}x{scene['size'][1]} pixels, ceiling {data['ceiling']} spp (the gold "
         f"standard: uniform at the ceiling). {data['repeats']} repeat(s) per run with seeds "
         f"{', '.join(map(str, data['seeds']))}: median time and median error. Every error is "
@@ -88,6 +94,12 @@ def write_curves_report(data: dict, out_dir: str | os.PathLike, png: str | os.Pa
         f"{inputs.get('seed', '?')} ({escape(str(reference.get('source')))}), denoised like every "
         "run. A run's time is everything it does: maps, scene sync, renders, denoising. "
         "Wall times depend on what else the machine was doing.</p>",
+        (f"<p class=meta>Each run renders the {count} frames one after another in one Cycles "
+         "session, as an animation render does (the scene synced once): its time is the whole "
+         "run, each error the mean over its frames, each frame measured against that frame's "
+         "reference; flicker is the error of the frame-to-frame changes against the "
+         "reference's own (0: no flicker), JOD the sequence's seen as a video at "
+         f"{scene.get('fps', 24):g} frames a second.</p>" if count else ""),
         "<p class=meta>" + ("VDP: ColorVideoVDP JOD (10 = no visible difference)." if vdp.get("ran")
                             else f"VDP skipped: {escape(str(vdp.get('skipped')))}") + "</p>",
         f"<figure><img alt='time-quality curves' src='{data_uri(png)}'></figure>" if png.is_file() else "",

@@ -3,20 +3,29 @@ each run's equal-quality speedups, as the plot, the report and the command's tab
 
 Schema (one file per scene and resolution)::
 
-    scene       {file, sha256, scene, frame, size: [w, h]}
+    scene       {file, sha256, scene, frame, size: [w, h]}; over frames (``curves --frames``)
+                also frames: [numbers], frame_range: "1-24", fps (frame = the first frame)
     ceiling     the contestants' ceiling (the gold standard's samples per pixel)
-    reference   {path, key, source: shipped|cache|rendered|given, inputs: {spp, seed, ...}}
+    reference   {path, key, source: shipped|cache|rendered|given, inputs: {spp, seed, ...}};
+                over frames: key (of every frame's key), source, inputs {spp, seed} and
+                frames: [each frame's reference as for one frame]
     repeats     N; seeds: the contestants' seeds (each contestant renders once per seed)
     metrics     ["flip", "flip_tile95", "flip_share", "mse", "jod"]: HDR-FLIP mean, the 95th
                 percentile of 32-px regions' mean FLIP, % of pixels above FLIP 0.103, MSE of
                 the display-referred images, ColorVideoVDP JOD (None where it did not run;
-                vdp.skipped says why)
+                vdp.skipped says why); over frames "flicker" too (SEQUENCE_METRICS)
     curves      {name: {label, baseline, points: [run names, budget growing]}}
     runs        {name: {curve, kind, label, params, time_of, gold, budget_s,
                         repeats: [{seed, seconds, mean_spp, flip, mse, jod, file, reused, stats}],
                         seconds, mean_spp, flip, mse, jod      (medians over the repeats),
                         speedups: {baseline: {metric: {value, time_to_reach_s, extrapolated,
                                                        faster, reason}}}}}
+
+Over frames a repeat is one run over every frame in one Cycles session: ``seconds`` the whole
+run, ``file`` its folder, flip, flip_tile95, flip_share and mse the means over its frames
+(``sequence_values``), ``flicker`` its sequence's (``core.validation.temporal``), ``jod``
+ColorVideoVDP's of the sequence as a video, ``relative_flicker``, and ``frames``: per frame
+{frame, file, seconds, mean_spp, flip, flip_tile95, flip_share, mse, flicker}.
 
 The median time and the median error of a run are taken separately. Speedups are read along
 each baseline curve's lower envelope (``core.validation.curves``); a run is not read along
@@ -32,6 +41,11 @@ from .curves import speedups_against
 #: flip_tile95: the 95th percentile of 32-px regions' mean FLIP (no region visibly worse);
 #: flip_share: % of pixels with FLIP above 0.103 (the paper's Table II).
 METRICS = ("flip", "flip_tile95", "flip_share", "mse", "jod")
+#: Over frames: the same, each the mean over the frames (JOD: the sequence's as a video), and
+#: the sequence's flicker.
+SEQUENCE_METRICS = ("flip", "flip_tile95", "flip_share", "mse", "flicker", "jod")
+#: Per-frame figures of a run over frames (``core.validation.sequence.FRAME_METRICS``).
+FRAME_FIGURES = ("flip", "flip_tile95", "flip_share", "mse", "flicker")
 #: Statistics of a render kept with each repeat in curves.json.
 STATS_KEPT = ("mode", "wall_s", "phases_s", "total_samples", "mean_spp", "renders", "max_spp",
               "noise_threshold", "time_budget_s", "stopped_by_time", "ideal_speedup",
@@ -49,25 +63,38 @@ def metric_values(metrics: dict) -> dict[str, float | None]:
             "jod": value("vdp", "jod")}
 
 
+def sequence_values(sequence: dict) -> dict[str, float | None]:
+    """A run's figures from the summary of its frames (``compare_sequence``'s ``sequence``):
+    the means over its frames, the flicker (and relative flicker) of the sequence, and the
+    JOD of the sequence as a video (None where it did not run)."""
+    flicker = sequence.get("flicker") or {}
+    return {**{metric: sequence["mean"].get(metric) for metric in ("flip", "flip_tile95", "flip_share", "mse")},
+            "flicker": flicker.get("flicker"), "relative_flicker": flicker.get("relative_flicker"),
+            "jod": (sequence.get("vdp") or {}).get("jod")}
+
+
 def _median(values) -> float | None:
     values = [v for v in values if v is not None]
     return float(statistics.median(values)) if values else None
 
 
-def summarise_run(contestant: Contestant, repeats: list[dict], budget_s: float | None = None) -> dict:
+def summarise_run(contestant: Contestant, repeats: list[dict], budget_s: float | None = None,
+                  metrics: tuple[str, ...] = METRICS) -> dict:
     """A run's entry: the contestant, every repeat, and the medians of time, samples and each
     metric (each median taken on its own)."""
     entry = {**contestant.to_dict(), "budget_s": budget_s, "repeats": repeats,
              "seconds": _median(r["seconds"] for r in repeats),
              "mean_spp": _median(r.get("mean_spp") for r in repeats)}
-    entry.update({metric: _median(r.get(metric) for r in repeats) for metric in METRICS})
+    entry.update({metric: _median(r.get(metric) for r in repeats) for metric in metrics})
     return entry
 
 
-def build_curves(header: dict, curve_specs: list, runs: dict[str, dict]) -> dict:
+def build_curves(header: dict, curve_specs: list, runs: dict[str, dict],
+                 metrics: tuple[str, ...] = METRICS) -> dict:
     """curves.json from the header (scene, ceiling, reference, repeats, seeds, vdp), the
     curve specs in registry order (``CurveSpec``) and the runs' entries (``summarise_run``),
-    with each run's speedups over every baseline curve."""
+    with each run's speedups over every baseline curve on each of ``metrics``
+    (``SEQUENCE_METRICS`` for runs over frames)."""
     curves = {}
     for spec in curve_specs:
         members = [name for name, run in runs.items() if run["curve"] == spec.name]
@@ -76,9 +103,9 @@ def build_curves(header: dict, curve_specs: list, runs: dict[str, dict]) -> dict
     baselines = {name: [(member, runs[member]["seconds"], runs[member]) for member in curve["points"]]
                  for name, curve in curves.items() if curve["baseline"]}
     for name, run in runs.items():
-        run["speedups"] = speedups_against(baselines, (name, run["seconds"], run), METRICS,
+        run["speedups"] = speedups_against(baselines, (name, run["seconds"], run), metrics,
                                            own_curve=run["curve"])
-    return {**header, "metrics": list(METRICS), "curves": curves, "runs": runs}
+    return {**header, "metrics": list(metrics), "curves": curves, "runs": runs}
 
 
 def speedup_text(speedup: dict | None) -> str:
@@ -88,30 +115,47 @@ def speedup_text(speedup: dict | None) -> str:
     return f"{speedup['value']:.2f}x" + ("*" if speedup.get("extrapolated") else "")
 
 
+#: The table's columns of values: (metric, heading, format).
+_COLUMNS = {"flip": ("FLIP", "7.4f"), "mse": ("MSE", "9.2e"), "flicker": ("flicker", "8.4f"),
+            "jod": ("JOD", "6.3f")}
+
+
+def frame_count(data: dict) -> int | None:
+    """How many frames each run renders (None: one frame, ``curves`` without --frames)."""
+    frames = data["scene"].get("frames")
+    return len(frames) if frames else None
+
+
 def table_lines(data: dict) -> list[str]:
     """The command's table: one line per run, in curve order, with its speedups over each
-    baseline on FLIP and MSE (and JOD where it ran)."""
+    baseline on FLIP and MSE (the flicker too over frames, JOD where it ran)."""
     baselines = [name for name, curve in data["curves"].items() if curve["baseline"]]
-    metrics = ["flip", "mse"] + (["jod"] if any(run.get("jod") is not None for run in data["runs"].values()) else [])
-    group = " " * (34 + 1 + 7 + 1 + 7 + 1 + 7 + 1 + 9 + (7 if "jod" in metrics else 0))
-    head = f"{'run':<34} {'time s':>7} {'spp':>7} {'FLIP':>7} {'MSE':>9}" + (f" {'JOD':>6}" if "jod" in metrics else "")
+    metrics = ["flip", "mse"]
+    metrics += [m for m in ("flicker", "jod") if m in data.get("metrics", METRICS)
+                and any(run.get(m) is not None for run in data["runs"].values())]
+    widths = [int(_COLUMNS[m][1].split(".")[0]) for m in metrics]
+    head = f"{'run':<34} {'time s':>7} {'spp':>7}" + "".join(f" {_COLUMNS[m][0]:>{w}}"
+                                                             for m, w in zip(metrics, widths))
+    group = " " * len(head)
     for baseline in baselines:
         width = 2 + 9 * len(metrics) - 1
         group += f"  {'speedup vs ' + baseline:^{width - 2}}"
-        head += "  " + " ".join(f"{m.upper():>8}" for m in metrics)
+        head += "  " + " ".join(f"{_COLUMNS[m][0].upper():>8}" for m in metrics)
     lines = [group, head]
     for curve in data["curves"].values():
         for name in curve["points"]:
             run = data["runs"][name]
-            line = (f"{run['label'][:34]:<34} {_num(run['seconds'], '7.2f')} {_num(run['mean_spp'], '7.1f')} "
-                    f"{_num(run['flip'], '7.4f')} {_num(run['mse'], '9.2e')}")
-            if "jod" in metrics:
-                line += f" {_num(run['jod'], '6.3f')}"
+            line = (f"{run['label'][:34]:<34} {_num(run['seconds'], '7.2f')} {_num(run['mean_spp'], '7.1f')}"
+                    + "".join(f" {_num(run.get(m), _COLUMNS[m][1])}" for m in metrics))
             for baseline in baselines:
                 speedups = run["speedups"].get(baseline)
                 line += "  " + (" ".join(f"{speedup_text(speedups.get(m)):>8}" for m in metrics)
                                 if speedups else f"{'(its own)':>{9 * len(metrics) - 1}}")
             lines.append(line)
+    count = frame_count(data)
+    if count:
+        lines.append(f"over {count} frames: time = the whole run (one scene sync), errors = the mean over "
+                     "the frames, flicker = the sequence's, JOD = the sequence's as a video")
     lines.append("speedup = time the baseline curve needs for the run's error / the run's time "
                  "(equal quality); * extrapolated beyond the curve's measured range")
     return lines
