@@ -17,6 +17,18 @@ Layout of DIR::
 A record is written after its image, both atomically, and reused while the hash of its
 inputs is unchanged (the scene file's bytes, size, frame, contestant, seed, budget, Blender
 and denoiser versions); its metrics are redone only when the reference changes.
+
+Over frames (``settings.frames``, ``curves --frames``) every run renders all the frames in
+one Cycles session (``run_contestant_frames``: the frame jobs of ``render --frames``), its
+time the whole run's, and each frame is compared with that frame's converged reference
+(``ensure_references``: each cached on its own); the run's errors are the means over its
+frames, with the flicker and the video JOD of its sequence (``compare_sequence``, as
+``compare`` measures two sequences). A run then keeps its frames in a folder::
+
+    runs/<contestant>_seed<k>/frame_0001.exr ...   each frame, written as it is done
+    runs/<contestant>_seed<k>.json                 its record, written once every frame is
+
+and is reused whole (a run cut short renders again: its time is the whole run's).
 """
 from __future__ import annotations
 
@@ -29,11 +41,13 @@ import numpy as np
 
 from ...core.errors import InputError
 from ...core.files import file_sha256, write_json
+from ...core.frames import frame_path
 from ...core.imageio import read_image, write_exr
 from ...core.progress import ProgressCallback, WeightedSteps
 from ...core.sampling.render_options import RenderOptions
 from ...core.validation.contestants import CURVES, Contestant, plan_contestants
-from ...core.validation.curves_results import (STATS_KEPT, build_curves, metric_values,
+from ...core.validation.curves_results import (FRAME_FIGURES, METRICS, SEQUENCE_METRICS, STATS_KEPT,
+                                               build_curves, metric_values, sequence_values,
                                                summarise_run)
 from ...core.validation.image_pair import check_pair
 from ...core.validation.metrics import compare_images
@@ -43,11 +57,16 @@ from ...core.validation.store import inputs_hash, read_record, write_record
 from ...core.validation.vdp import vdp_unavailable_reason
 from ..cycles.denoise import DENOISE_VERSION
 from ..scene.probe import render_size
-from .contestants import run_contestant, warm_up
-from .reference import blender_version, ensure_reference, reference_inputs, scene_ceiling
+from .contestants import run_contestant, run_contestant_frames, warm_up, without_frames
+from .reference import (blender_version, ensure_reference, ensure_references, reference_inputs,
+                        scene_ceiling)
 
 #: Most repeats accepted (each repeat renders every contestant again).
 MAX_REPEATS = 50
+#: Statistics kept for each frame of a run over frames (beside ``STATS_KEPT``).
+FRAME_STATS_KEPT = STATS_KEPT + ("cycles_sync_s", "sequence_budget", "maps")
+#: How a run over frames names its frames inside its folder (``core.frames.frame_path``).
+FRAME_NAME = "frame_####.exr"
 
 
 @dataclass(frozen=True)
@@ -57,6 +76,8 @@ class CurvesSettings:
     ``ceiling`` None: the scene's own Cycles samples. ``seed``: the first contestant seed
     (repeats use seed, seed + 1, ...). ``reference``: an EXR to use instead of the cached or
     rendered one; ``reference_spp``: the reference's samples (default max(1024, 16 x ceiling)).
+    ``frames``: render every run over these frames (``core.frames.parse_frame_list``) in one
+    Cycles session, instead of the one frame ``frame`` (the scene's current one when None).
     """
 
     ceiling: int | None = None
@@ -69,6 +90,7 @@ class CurvesSettings:
     vdp: bool = True
     reference: Path | None = None
     reference_spp: int | None = None
+    frames: tuple[int, ...] | None = None
 
     @property
     def seeds(self) -> list[int]:
@@ -84,11 +106,42 @@ class CurvesSettings:
             raise InputError(f"--max-spp must be at least 1 (got {self.ceiling})")
         if self.reference_spp is not None and self.reference_spp < 1:
             raise InputError(f"--reference-spp must be at least 1 (got {self.reference_spp})")
+        if self.frames is not None:
+            if not self.frames:
+                raise InputError("--frames names no frame")
+            if self.frame is not None:
+                raise InputError("--frame and --frames cannot be combined")
+            if self.reference is not None:
+                raise InputError("--reference is one frame's reference; with --frames each frame's "
+                                 "comes from the cache (`xsl-render reference --frames`) or is rendered")
         if self.reference is None:
             check_contestant_seeds(self.seeds, REFERENCE_SEED)
         elif not Path(self.reference).is_file():
             raise InputError(f"no such reference file: {self.reference}")
         return self
+
+
+def frames_text(frames: list[int]) -> str:
+    """A frame list as ``--frames`` writes it: runs of one step as ``A-B`` or ``A-B:S``
+    (at least three frames for a step above 1), single frames as they are ([1, 2, 3, 8] ->
+    "1-3,8")."""
+    items, index = [], 0
+    while index < len(frames):
+        end = index
+        if index + 1 < len(frames):
+            step = frames[index + 1] - frames[index]
+            while end + 1 < len(frames) and frames[end + 1] - frames[end] == step:
+                end += 1
+            if step != 1 and end - index < 2:
+                end = index
+        first, last = frames[index], frames[end]
+        if end == index:
+            items.append(str(first))
+        else:
+            step = frames[index + 1] - first
+            items.append(f"{first}-{last}" + (f":{step}" if step != 1 else ""))
+        index = end + 1
+    return ",".join(items)
 
 
 def _cost(contestant: Contestant, ceiling: int, runs: dict[str, Contestant]) -> float:
@@ -129,6 +182,13 @@ class CurvesJob:
         self.size = tuple(self.settings.resolution or render_size(scene))
         RenderOptions(max_spp=self.ceiling, resolution=self.size).check().check_frame(*self.size)
         self.contestants = plan_contestants(self.ceiling, self.settings.curves)
+        self.fps = float(scene.render.fps) / float(scene.render.fps_base or 1.0)
+        self.frames = None if self.settings.frames is None else list(self.settings.frames)
+        if self.frames is not None:
+            missing = without_frames(self.contestants)
+            if missing:
+                raise InputError(f"--frames: {', '.join(missing)} cannot render over frames; "
+                                 "leave their curves out (--curves)")
         return scene
 
     def reference(self, steps: WeightedSteps):
@@ -142,6 +202,8 @@ class CurvesJob:
                     "inputs": {"spp": given.spp, "seed": given.seed}}
             steps.finish()
             return given.image, info
+        if self.frames is not None:
+            return self.frame_references(steps)
         inputs = reference_inputs(self.scene, self.blend_file, spp=self.settings.reference_spp,
                                   resolution=self.size, frame=self.scene.frame_current,
                                   max_spp=self.ceiling, blend_sha256=self.sha256)
@@ -154,10 +216,32 @@ class CurvesJob:
         steps.finish()
         return read_image(reference.path), reference.to_dict()
 
+    def frame_references(self, steps: WeightedSteps):
+        """Each frame's reference, cached or rendered (one Cycles session for those rendered):
+        ``{frame: path}`` and their description (per frame, and a key of them all)."""
+        inputs = [reference_inputs(self.scene, self.blend_file, spp=self.settings.reference_spp,
+                                   resolution=self.size, frame=frame, max_spp=self.ceiling,
+                                   blend_sha256=self.sha256)
+                  for frame in self.frames]
+        check_contestant_seeds(self.settings.seeds, inputs[0].seed)
+        if all(find_reference(item.key) is not None for item in inputs):
+            steps.reweight(0.01)
+        steps.begin(f"references of {len(inputs)} frames ({inputs[0].spp} spp)")
+        references = ensure_references(self.scene, inputs, progress=steps.sub("references"),
+                                       file_name=self.blend_file.name)
+        steps.finish()
+        frames = [reference.to_dict() for reference in references]
+        info = {"key": inputs_hash({"step": "curve_references", "keys": [item["key"] for item in frames]}),
+                "source": "+".join(dict.fromkeys(item["source"] for item in frames)),
+                "inputs": {"spp": inputs[0].spp, "seed": inputs[0].seed}, "frames": frames}
+        return {reference.inputs.frame: reference.path for reference in references}, info
+
     # -- runs --------------------------------------------------------------------------
     def run_inputs(self, contestant: Contestant, seed: int, budget_s: float | None) -> dict:
+        where = ({"frame": self.scene.frame_current} if self.frames is None
+                 else {"frames": list(self.frames)})
         inputs = {"step": "curve_run", "scene_sha256": self.sha256, "scene": self.scene.name,
-                  "frame": self.scene.frame_current, "size": list(self.size), "seed": seed,
+                  **where, "size": list(self.size), "seed": seed,
                   "contestant": {k: v for k, v in contestant.to_dict().items() if k != "label"},
                   "blender": blender_version(),
                   "denoise": DENOISE_VERSION}
@@ -167,6 +251,8 @@ class CurvesJob:
 
     def render(self, contestant: Contestant, seed: int, budget_s: float | None,
                steps: WeightedSteps) -> dict:
+        if self.frames is not None:
+            return self.render_frames(contestant, seed, budget_s, steps)
         folder = self.out_dir / "runs"
         stem = f"{contestant.name}_seed{seed}"
         exr, record_path = folder / f"{stem}.exr", folder / f"{stem}.json"
@@ -199,8 +285,65 @@ class CurvesJob:
         steps.finish()
         return record
 
-    def measure(self, record: dict, reference: np.ndarray, reference_key: str) -> dict:
-        """The record's metrics against the reference (reused while the reference is the same)."""
+    def render_frames(self, contestant: Contestant, seed: int, budget_s: float | None,
+                      steps: WeightedSteps) -> dict:
+        """A run over every frame (module notes): its frames written as they are done, its
+        record once all are."""
+        stem = f"{contestant.name}_seed{seed}"
+        folder, record_path = self.out_dir / "runs" / stem, self.out_dir / "runs" / f"{stem}.json"
+        paths = {frame: Path(frame_path(str(folder / FRAME_NAME), frame)) for frame in self.frames}
+        inputs = self.run_inputs(contestant, seed, budget_s)
+        digest = inputs_hash(inputs)
+        label = f"{contestant.name} (seed {seed})"
+        steps.begin(label)
+        record = read_record(record_path, digest, tuple(paths.values()))
+        if record is not None:
+            self.counts["reused"] += 1
+            record["reused"] = True
+            steps.finish()
+            return record
+        if not self.warm:
+            warm_up(self.scene)
+            self.warm = True
+        options = RenderOptions(max_spp=self.ceiling, seed=seed, resolution=self.size).check()
+
+        def on_frame(result) -> dict:
+            outcome = result.outcome
+            path = paths[result.frame]
+            write_exr(path, outcome.image, ["R", "G", "B", "A"],
+                      attributes={"xsl_render:contestant": contestant.name, "xsl_render:seed": seed,
+                                  "xsl_render:frame": result.frame})
+            self.warnings.extend(f"frame {result.frame}: {w}" for w in outcome.warnings)
+            stats = {key: outcome.stats[key] for key in FRAME_STATS_KEPT if key in outcome.stats}
+            return {"frame": result.frame, "file": path.relative_to(self.out_dir).as_posix(), "stats": stats}
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            frames, seconds = run_contestant_frames(self.scene, contestant, options, self.frames, budget_s,
+                                                    on_frame, progress=steps.sub(label))
+        self.warnings += [str(w.message) for w in caught]
+        every = [frame["stats"] for frame in frames]
+        spp = [s["mean_spp"] for s in every if s.get("mean_spp") is not None]
+        stats = {"mode": every[0].get("mode"), "frames": len(frames),
+                 "mean_spp": float(np.mean(spp)) if spp else None,
+                 "total_samples": sum(s.get("total_samples", 0) for s in every),
+                 "cycles_sync_s": sum(s.get("cycles_sync_s", 0.0) for s in every),
+                 "frame_wall_s": sum(s.get("wall_s", 0.0) for s in every)}
+        if "path_guiding" in every[0]:
+            stats["path_guiding"] = dict(every[0]["path_guiding"])
+        record = {"inputs": inputs, "input_hash": digest, "seconds": seconds, "stats": stats,
+                  "file": folder.relative_to(self.out_dir).as_posix(), "frames": frames}
+        write_record(record_path, record)
+        self.counts["rendered"] += 1
+        record["reused"] = False
+        steps.finish()
+        return record
+
+    def measure(self, record: dict, reference, reference_key: str) -> dict:
+        """The record's metrics against the reference (reused while the reference is the same);
+        over frames ``reference`` is ``{frame: path}``."""
+        if self.frames is not None:
+            return self.measure_frames(record, reference, reference_key)
         digest = inputs_hash({"step": "curve_metrics", "run": record["input_hash"],
                               "reference": reference_key, "vdp": self.settings.vdp})
         if record.get("metrics_hash") != digest:
@@ -211,6 +354,27 @@ class CurvesJob:
             record.update(metrics={name: result.summary() for name, result in results.items()},
                           metrics_hash=digest)
             write_record(self.out_dir / Path(record["file"]).with_suffix(".json"), record)
+            record["reused"] = reused
+        return record
+
+    def measure_frames(self, record: dict, references: dict, reference_key: str) -> dict:
+        """Every frame against its reference and the run as a sequence (``compare_sequence``:
+        per-frame figures, their means, flicker, the video JOD at the scene's frame rate)."""
+        from ...core.validation.frame_sequence import FramePair, FrameSize
+        from ...core.validation.sequence import compare_sequence
+
+        digest = inputs_hash({"step": "curve_metrics", "run": record["input_hash"], "reference": reference_key,
+                              "vdp": self.settings.vdp, "fps": self.fps})
+        if record.get("metrics_hash") != digest:
+            pairs = [FramePair(entry["frame"], Path(references[entry["frame"]]), self.out_dir / entry["file"])
+                     for entry in record["frames"]]
+            compared = compare_sequence(pairs, FrameSize(self.size[0], self.size[1], True), fps=self.fps,
+                                        vdp=self.settings.vdp)
+            reused = record.pop("reused")
+            for entry, measured in zip(record["frames"], compared["frames"]):
+                entry.update({figure: measured[figure] for figure in FRAME_FIGURES}, metrics=measured["metrics"])
+            record.update(sequence=compared["sequence"], metrics_hash=digest)
+            write_record(self.out_dir / "runs" / f"{Path(record['file']).name}.json", record)
             record["reused"] = reused
         return record
 
@@ -243,18 +407,33 @@ class CurvesJob:
                     record = self.render(contestant, seed, budget, steps)
                     self.measure(record, reference, reference_info["key"])
                     records.setdefault(contestant.name, []).append(record)
-        runs = {c.name: summarise_run(c, [self.repeat_entry(r) for r in records[c.name]], budgets[c.name])
+        metrics = METRICS if self.frames is None else SEQUENCE_METRICS
+        runs = {c.name: summarise_run(c, [self.repeat_entry(r) for r in records[c.name]], budgets[c.name],
+                                      metrics)
                 for c in self.contestants}
         self.check_guiding(runs)
-        header = {"scene": {"file": str(self.blend_file), "sha256": self.sha256, "scene": self.scene.name,
-                            "frame": self.scene.frame_current, "size": list(self.size)},
+        scene = {"file": str(self.blend_file), "sha256": self.sha256, "scene": self.scene.name,
+                 "frame": self.scene.frame_current, "size": list(self.size)}
+        if self.frames is not None:
+            scene.update(frame=self.frames[0], frames=list(self.frames),
+                         frame_range=frames_text(self.frames), fps=self.fps)
+        header = {"scene": scene,
                   "ceiling": self.ceiling, "reference": reference_info, "repeats": len(seeds),
                   "seeds": seeds, "vdp": {"ran": vdp_reason is None, "skipped": vdp_reason},
                   "warnings": list(dict.fromkeys(self.warnings)), **self.counts}
-        return build_curves(header, CURVES, runs)
+        return build_curves(header, CURVES, runs, metrics)
 
     def repeat_entry(self, record: dict) -> dict:
         stats = record["stats"]
+        if self.frames is not None:
+            frames = [{"frame": entry["frame"], "file": entry["file"], "seconds": entry["stats"].get("wall_s"),
+                       "mean_spp": entry["stats"].get("mean_spp"),
+                       **{figure: entry.get(figure) for figure in FRAME_FIGURES}, "stats": entry["stats"]}
+                      for entry in record["frames"]]
+            return {"seed": record["inputs"]["seed"], "seconds": record["seconds"],
+                    "mean_spp": stats.get("mean_spp"), **sequence_values(record["sequence"]),
+                    "file": record["file"], "reused": record["reused"], "stats": stats,
+                    "frames": frames}
         return {"seed": record["inputs"]["seed"], "seconds": record["seconds"],
                 "mean_spp": stats.get("mean_spp"), **metric_values(record["metrics"]),
                 "file": record["file"], "reused": record["reused"], "stats": stats}
@@ -273,8 +452,10 @@ class CurvesJob:
                 if twin is None:
                     guiding["effect"] = "unknown: no uniform run with the same samples and seed"
                     continue
-                identical = np.array_equal(read_image(self.out_dir / repeat["file"]),
-                                           read_image(self.out_dir / twin["file"]))
+                files = ([(repeat["file"], twin["file"])] if self.frames is None else
+                         [(a["file"], b["file"]) for a, b in zip(repeat["frames"], twin["frames"])])
+                identical = all(np.array_equal(read_image(self.out_dir / a), read_image(self.out_dir / b))
+                                for a, b in files)
                 guiding["effect"] = ("ignored by Cycles: identical to uniform with the same samples and seed"
                                      if identical else "used: the image differs from uniform with the same "
                                                        "samples and seed")

@@ -6,6 +6,11 @@ XSL at four ceilings, all at one resolution, denoised alike, each timed as a who
 compared with the converged reference (``xsl-render reference``, cached). Writes
 DIR/curves.json, DIR/curves.png and DIR/report.html and prints the table. Resumable:
 finished runs in DIR are reused.
+
+``--frames 1-24``: every run renders all those frames in one Cycles session, as ``render
+--frames`` does (its time the whole run's, one scene sync), each frame compared with that
+frame's reference; a run's errors are the means over its frames, beside its sequence's
+flicker (``addon.validation.curves_runner``).
 """
 from __future__ import annotations
 
@@ -31,6 +36,10 @@ def add_arguments(parser) -> None:
     add_scene_arguments(parser)
     parser.add_argument("--out", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished runs in it are reused")
+    parser.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                        help="render every run over these frames (1-24, 1-24:2 or a list such as "
+                             "1-3,8) in one Cycles session, each frame against its own reference: "
+                             "errors are the means over the frames, plus the sequence's flicker")
     parser.add_argument("--max-spp", type=ceiling, metavar="CEILING",
                         help="the ceiling: gold's samples per pixel, the budgets follow it "
                              "(default: the scene's own Cycles samples)")
@@ -52,6 +61,25 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _frames(args) -> tuple[int, ...] | None:
+    """The --frames list (None without it); --frame and --reference do not go with it."""
+    from ...core.errors import InputError
+    from ...core.frames import parse_frame_list
+
+    if args.frames is None:
+        return None
+    if args.frame is not None:
+        raise InputError("--frame and --frames cannot be combined")
+    if args.reference is not None:
+        raise InputError("--reference is one frame's reference and cannot be combined with --frames "
+                         "(each frame's reference is cached: xsl-render reference --frames)")
+    return parse_frame_list(args.frames)
+
+
+def check(args) -> None:
+    _frames(args)
+
+
 def run(args) -> int:
     from ...addon.validation.curves_runner import CurvesSettings, run_curves
     from ...core.validation.contestants import parse_curves
@@ -67,7 +95,7 @@ def run(args) -> int:
         scene_name=args.scene_name, repeats=args.repeats, seed=args.seed,
         curves=parse_curves(args.curves), vdp=args.vdp,
         reference=Path(args.reference) if args.reference else None,
-        reference_spp=args.reference_spp).check()
+        reference_spp=args.reference_spp, frames=_frames(args)).check()
     out = check_output_folder(args.out)
     path = scene_file(args)
     bar = None if args.quiet else ProgressBar(NAME)
@@ -79,9 +107,11 @@ def run(args) -> int:
             bar.close()
     for warning in data["warnings"]:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
-    reference = data["reference"]
-    print(f"{Path(data['scene']['file']).name} (scene '{data['scene']['scene']}', frame "
-          f"{data['scene']['frame']}) at {data['scene']['size'][0]}x{data['scene']['size'][1]}, ceiling "
+    reference, scene = data["reference"], data["scene"]
+    where = (f"frame {scene['frame']}" if not scene.get("frames") else
+             f"frames {scene['frame_range']}, mean over {len(scene['frames'])} frames")
+    print(f"{Path(scene['file']).name} (scene '{scene['scene']}', {where}) at "
+          f"{scene['size'][0]}x{scene['size'][1]}, ceiling "
           f"{data['ceiling']} spp; reference {reference['inputs'].get('spp')} spp, seed "
           f"{reference['inputs'].get('seed')} ({reference['source']}); {data['repeats']} repeat(s)")
     print("\n".join(table_lines(data)))
