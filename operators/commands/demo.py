@@ -54,7 +54,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ...addon.scene.blend_session import check_blend_file
-    from ...addon.validation_runner import SceneJob
+    from ...addon.validation.runner import SceneJob
     from ...core.validation.example_scenes import example_scene_path
     from ...core.validation.plan import DEFAULT_VARIANTS, ValidationSettings
     from ...core.validation.store import check_output_folder

@@ -95,7 +95,7 @@ def run_and_report(jobs, settings, out: Path, label: str, quiet: bool) -> dict:
     Prints one line per scene and, last, the report's path."""
     import sys
 
-    from ...addon.validation_runner import run_validation
+    from ...addon.validation.runner import run_validation
     from ...core.validation.report_html import write_report
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
@@ -153,7 +153,7 @@ def scene_lines(name: str, scene: dict) -> list[str]:
 
 def run(args) -> int:
     from ...addon.scene.blend_session import check_blend_file
-    from ...addon.validation_runner import SceneJob
+    from ...addon.validation.runner import SceneJob
     from ...core.validation.example_scenes import resolve_scenes
     from ...core.validation.plan import parse_list
     from ...core.validation.store import check_output_folder

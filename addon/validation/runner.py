@@ -15,20 +15,20 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..core.files import write_json
-from ..core.imageio import write_exr, write_png
-from ..core.maps.director import xs_map, xsl_map
-from ..core.maps.files import read_map_set, write_map_set
-from ..core.maps.options import MapOptions
-from ..core.progress import ProgressCallback, WeightedSteps
-from ..core.sampling.render_options import RenderOptions
-from ..core.validation.compare import compare_with_gold
-from ..core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
+from ...core.files import write_json
+from ...core.imageio import write_exr, write_png
+from ...core.maps.director import xs_map, xsl_map
+from ...core.maps.files import read_map_set, write_map_set
+from ...core.maps.options import MapOptions
+from ...core.progress import ProgressCallback, WeightedSteps
+from ...core.sampling.render_options import RenderOptions
+from ...core.validation.compare import compare_with_gold
+from ...core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
                                     map_seconds, scaled_size, scene_variants)
-from ..core.validation.reference import default_reference_spp, find_reference
-from ..core.validation.results import scene_summary
-from ..core.validation.store import file_sha256, inputs_hash, read_record, write_record
-from ..core.validation.vdp import vdp_unavailable_reason
+from ...core.validation.reference import default_reference_spp, find_reference
+from ...core.validation.results import scene_summary
+from ...core.validation.store import file_sha256, inputs_hash, read_record, write_record
+from ...core.validation.vdp import vdp_unavailable_reason
 
 #: Relative cost of each step, in gold renders, for the overall progress fraction.
 STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4,
@@ -114,11 +114,11 @@ class _SceneRun:
         """Open the .blend the first time a step needs Blender (a fully reused scene with a
         given resolution never does)."""
         if self.scene is None:
-            from .scene.blend_session import open_blend
+            from ..scene.blend_session import open_blend
 
             self.scene = open_blend(self.job.path)
         if warm and not self.warm:
-            from .validation.contestants import warm_up
+            from .contestants import warm_up
 
             warm_up(self.scene)         # no timed render pays Cycles' one-time start-up
             self.warm = True
@@ -145,7 +145,7 @@ class _SceneRun:
 
     def scene_size(self) -> tuple[int, int]:
         """The scene's own render size (opens the .blend, renders nothing)."""
-        from .scene.probe import render_size
+        from ..scene.probe import render_size
 
         return render_size(self.open_scene(warm=False))
 
@@ -163,7 +163,7 @@ class _SceneRun:
             maps = read_map_set(folder)
             self.results["reused"] += 1
         else:
-            from .maps.director_maps import compute_maps
+            from ..maps.director_maps import compute_maps
 
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
@@ -203,7 +203,7 @@ class _SceneRun:
         return inputs
 
     def render(self, variant: Variant) -> dict:
-        from .cycles import selective_render as sr
+        from ..cycles import selective_render as sr
 
         exr = self.folder / f"{variant.name}.exr"
         spp_exr, spp_png = exr.with_name(f"{variant.name}_spp.exr"), exr.with_name(f"{variant.name}_spp.png")
@@ -267,7 +267,7 @@ class _SceneRun:
     def reference(self):
         """The scene's converged reference at this size: cached (shipped with the repository,
         or in the user cache) or rendered now and cached."""
-        from .validation.reference import ensure_reference, reference_inputs
+        from .reference import ensure_reference, reference_inputs
 
         scene = self.open_scene(warm=False)
         inputs = reference_inputs(scene, self.job.path, spp=self.settings.reference_spp,
