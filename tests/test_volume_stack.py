@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from xsl_render.core.camera import CameraModel
-from xsl_render.core.maps.volume_stack import (camera_may_be_inside, coincident_events,
-                                               near_plane_bounds, probe_inside)
+from xsl_render.core.maps.volume_stack import (ENTERING, LEAVING, SURFACE, camera_may_be_inside,
+                                               coincident_events, near_plane_bounds, probe_inside,
+                                               surface_exit_ties)
 
 
 def _camera(kind="PERSP", location=(0.0, 0.0, 0.0), clip_start=0.1, **kwargs):
@@ -64,3 +65,27 @@ def test_coincident_events_need_two_owners_at_one_distance():
     # 2: 0.5 apart; 3: two volumes' faces; 4: no events.
     assert ties.tolist() == [True, False, False, True, False]
     assert not coincident_events(5, ray, t, owner, tolerance=1e-8)[0]
+
+
+def test_surface_exit_ties_are_the_first_surface_with_a_face_left_there():
+    # 0: enters volume 0, leaves it on the floor (the fog box on the ground, seen through it)
+    # 1: leaves volume 1 on the floor, seen from inside
+    # 2: enters volume 0 on the surface (a water plane on the box's top): another tie
+    # 3: leaves volume 0 on the floor while entering volume 1 there: three events at once
+    # 4: two volumes' faces meet, the surface is elsewhere
+    # 5: leaves volume 0 on a surface that is volume 1's face (glass over water)
+    # 6: no tie at all
+    ray = np.array([0, 0, 0, 1, 1, 2, 2, 3, 3, 3, 4, 4, 4, 5, 5, 6, 6])
+    t = np.array([1.0, 5.0, 5.0 + 1e-6, 4.0, 4.0, 3.0, 3.0, 6.0, 6.0, 6.0, 2.0, 2.0, 9.0,
+                  7.0, 7.0, 1.0, 8.0])
+    owner = np.array([0, 0, -1, 1, -1, 0, -1, 0, 1, -1, 0, 1, -1, 0, 1, 0, -1])
+    kind = np.array([ENTERING, LEAVING, SURFACE, LEAVING, SURFACE, ENTERING, SURFACE, LEAVING,
+                     ENTERING, SURFACE, LEAVING, ENTERING, SURFACE, LEAVING, SURFACE, ENTERING,
+                     SURFACE])
+    medium = surface_exit_ties(7, ray, t, owner, kind)
+    assert medium.tolist() == [0, 1, -1, -1, -1, -1, -1]
+    ties = coincident_events(7, ray, t, owner)
+    assert ties.tolist() == [True, True, True, True, True, True, False]
+    shuffled = np.random.default_rng(0).permutation(len(ray))
+    again = surface_exit_ties(7, ray[shuffled], t[shuffled], owner[shuffled], kind[shuffled])
+    assert again.tolist() == medium.tolist()

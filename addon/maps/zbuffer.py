@@ -12,7 +12,10 @@ two differ for open meshes, surface-only faces, flipped normals).
 
 Every volume-face crossing and every first surface is also an *event* of its ray; rays
 with two events of different objects at the same distance are marked in ``ties``: there
-Cycles' answer depends on its rounding, and the X map asks Cycles.
+Cycles' answer depends on its rounding. Where the only coincidence is the first surface
+with a face the ray leaves a volume by, ``tie_exit`` names that volume and
+``surface_face`` the surface's triangle (``addon.maps.ties`` works those out without
+rendering them); the X map asks Cycles about the other ties.
 """
 from __future__ import annotations
 
@@ -24,8 +27,9 @@ import numpy as np
 
 from ...core.camera import CameraModel
 from ...core.maps.camera_rays import CameraRays, MediumIntervals
-from ...core.maps.volume_stack import (TIE_TOLERANCE, camera_may_be_inside, coincident_events,
-                                       probe_inside)
+from ...core.maps.volume_stack import (ENTERING, LEAVING, SURFACE, TIE_TOLERANCE,
+                                       camera_may_be_inside, coincident_events, probe_inside,
+                                       surface_exit_ties)
 from ..scene.geometry import SceneGeometry, Triangles
 
 #: Crossings followed per ray and volume before giving up (a closed mesh needs 2 each time
@@ -48,7 +52,7 @@ def _normals(tris: Triangles) -> np.ndarray:
 
 def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = "") -> CameraRays:
     """The Z buffer of ``camera`` over its render window, with every volume's intervals
-    and the rays whose events coincide (``CameraRays.ties``)."""
+    and the rays whose events coincide (``CameraRays.ties``, ``tie_exit``)."""
     window = camera.pixel_window()
     origins, directions = camera.pixel_rays(window)
     t_near, t_clip = camera.clip_range(directions)
@@ -58,32 +62,82 @@ def cast_camera_rays(camera: CameraModel, geometry: SceneGeometry, key: str = ""
     near, clip = t_near.ravel(), t_clip.ravel()
     t_far = clip.copy()
     hit = np.zeros(len(near), dtype=bool)
-    events = [(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))]
+    surface_face = np.full(len(near), -1, dtype=np.int32)
+    surface_tree = None
+    events = [(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int8))]
     if len(geometry.surfaces.triangles):
-        # A surface that is also a volume's face (glass over water) is one event with
-        # it; only then is the face hit needed (asking for it costs the casts 5 %).
-        shared = bool(np.any(geometry.surface_medium >= 0))
-        distances, faces = _first_hits(_bvh(geometry.surfaces), o, d, near, clip, shared)
+        # The face hit tells a surface that is also a volume's face (glass over water),
+        # one event with it, and the triangle of a tie; it costs the casts 5 %, so it is
+        # asked for only where there are volumes.
+        faces_needed = bool(geometry.volumes)
+        surface_tree = _bvh(geometry.surfaces)
+        distances, faces = _first_hits(surface_tree, o, d, near, clip, faces_needed)
         hit = np.isfinite(distances)
         t_far[hit] = distances[hit]
         rows = np.flatnonzero(hit)
-        owner = geometry.surface_medium[faces[rows]] if shared else np.full(len(rows), -1)
-        events.append((rows, t_far[rows], owner.astype(np.int64)))
+        if faces_needed:
+            surface_face[rows] = faces[rows]
+            owner = geometry.surface_medium[faces[rows]]
+        else:
+            owner = np.full(len(rows), -1)
+        events.append((rows, t_far[rows], owner.astype(np.int64), np.full(len(rows), SURFACE, np.int8)))
     gate = camera_may_be_inside(camera, geometry.volume_bounds)
     intervals = {}
     for index, (name, tris) in enumerate(geometry.volumes.items()):
         shell = geometry.shells.get(name, Triangles.empty())
-        intervals[name], (rows, ts) = _volume_intervals(tris, shell, o, d, near, t_far, gate)
-        events.append((rows, ts, np.full(len(rows), index, dtype=np.int64)))
+        intervals[name], (rows, ts, kinds) = _volume_intervals(tris, shell, o, d, near, t_far, gate)
+        events.append((rows, ts, np.full(len(rows), index, dtype=np.int64), kinds))
+    tie_exit = np.full(len(near), -1, dtype=np.int32)
     if intervals:
-        ray, t, owner = (np.concatenate(part) for part in zip(*events))
+        ray, t, owner, kind = (np.concatenate(part) for part in zip(*events))
         ties = coincident_events(len(near), ray, t, owner)
+        tie_exit = surface_exit_ties(len(near), ray, t, owner, kind)
+        if surface_tree is not None:
+            behind = _seen_behind(surface_tree, geometry.surfaces, surface_face, tie_exit >= 0,
+                                  o, d, t_far, clip)
+            tie_exit[behind] = -1
     else:                       # one event per ray at most (its surface): nothing can tie
         ties = np.zeros(len(near), dtype=bool)
     return CameraRays(size=(camera.height, camera.width), window=window, origins=origins,
                       directions=directions, t_near=t_near, t_far=t_far.reshape(shape),
                       hit=hit.reshape(shape), view_axis=camera.view_axis(),
-                      intervals=intervals, key=key, ties=ties.reshape(shape))
+                      intervals=intervals, key=key, ties=ties.reshape(shape),
+                      tie_exit=tie_exit.reshape(shape), surface_face=surface_face.reshape(shape))
+
+
+def _seen_behind(tree, surfaces: Triangles, faces, rays: np.ndarray, o, d, t_far, clip) -> np.ndarray:
+    """Which of ``rays`` (a mask) meet another surface behind their first one (triangle
+    ``faces``), before the clip end: a sample that passes the first surface sees that one.
+    Rays whose surface's plane has every surface vertex on the ray's side (a ground
+    plane under the scene) are let off without a cast."""
+    behind = np.zeros(len(rays), dtype=bool)
+    index = np.flatnonzero(rays)
+    if not len(index):
+        return behind
+    # Per distinct triangle and side of it the rays come from (few: a floor's two).
+    face, inverse = np.unique(faces[index], return_inverse=True)
+    tri = surfaces.vertices[surfaces.triangles[face]]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    inverse = inverse.ravel()
+    side = np.einsum("ij,ij->i", normal[inverse], o[index] - tri[inverse, 0]) > 0
+    kinds, which = np.unique(face.astype(np.int64)[inverse] * 2 + side, return_inverse=True)
+    points = surfaces.vertices[np.unique(surfaces.triangles)]
+    scale = TIE_TOLERANCE * max(1.0, float(np.abs(points).max(initial=0.0)))
+    crossed = np.zeros(len(kinds), dtype=bool)
+    for k, kind in enumerate(kinds):
+        v = surfaces.vertices[surfaces.triangles[kind // 2]]
+        n = np.cross(v[1] - v[0], v[2] - v[0])
+        n *= (1.0 if kind % 2 else -1.0) / max(np.linalg.norm(n), 1e-300)
+        crossed[k] = bool(np.any((points - v[0]) @ n < -scale))
+    index = index[crossed[which.ravel()]]
+    if not len(index):
+        return behind
+    skip = 4 * TIE_TOLERANCE * np.maximum(1.0, np.abs(t_far[index]))
+    starts = o[index] + d[index] * (t_far[index] + skip)[:, None]
+    distance, _ = _cast(tree, starts.tolist(), d[index].tolist(),
+                        np.maximum(clip[index] - t_far[index] - skip, 0.0).tolist())
+    behind[index] = np.isfinite(distance)
+    return behind
 
 
 @contextmanager
@@ -199,7 +253,8 @@ def _in_window(t, near, far):
 
 def _volume_intervals(tris: Triangles, shell: Triangles, o, d, near, far, gate: bool):
     """Pieces [t0, t1) of each ray inside the volume bounded by ``tris``, within
-    [near, far), and the crossings of its faces as events (ray index, distance).
+    [near, far), and the crossings of its faces as events (ray index, distance, ENTERING
+    or LEAVING by the face's winding).
 
     ``shell`` holds the object's other faces, which only the camera-in-volume probe sees;
     ``gate`` is Cycles' camera-in-volume gate (False: every ray starts outside). All
@@ -208,7 +263,7 @@ def _volume_intervals(tris: Triangles, shell: Triangles, o, d, near, far, gate: 
     Whether a crossing enters or leaves comes from the winding of the face hit (its
     normal against the ray), as Cycles' volume stack decides it."""
     empty = MediumIntervals(np.zeros(0, np.int32), np.zeros(0), np.zeros(0))
-    no_events = (np.zeros(0, np.int64), np.zeros(0))
+    no_events = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8))
     if not len(tris.triangles):
         return empty, no_events
     lo, hi = tris.bounds()
@@ -231,9 +286,10 @@ def _volume_intervals(tris: Triangles, shell: Triangles, o, d, near, far, gate: 
         through = enter < leave                         # rays that really pass through it
         crossings = np.concatenate([enter[through], leave[through]])
         owner = np.concatenate([ray[through], ray[through]])
+        kinds = np.repeat(np.array([ENTERING, LEAVING], np.int8), int(through.sum()))
         counted = _in_window(crossings, near[owner], far[owner]) & np.isfinite(crossings)
         return (MediumIntervals(ray[keep].astype(np.int32), t0[keep], t1[keep]),
-                (owner[counted].astype(np.int64), crossings[counted]))
+                (owner[counted].astype(np.int64), crossings[counted], kinds[counted]))
     # Any mesh: the probe decides where each ray starts, and a ray that starts inside
     # an open mesh may never come near its faces.
     inside = _probe(tris, shell, o + d * near[:, None]) if gate else np.zeros(len(o), dtype=bool)
@@ -293,7 +349,7 @@ def _walk(tris: Triangles, normals, ray, inside, o, d, near, far):
     inside = inside.copy()
     entered_at = t.copy()
     found_ray, found_t0, found_t1 = [], [], []
-    event_ray, event_t = [], []
+    event_ray, event_t, event_kind = [], [], []
     active = np.arange(len(ray))
     for _ in range(_MAX_CROSSINGS):
         if not len(active):
@@ -310,6 +366,7 @@ def _walk(tris: Triangles, normals, ray, inside, o, d, near, far):
         counted = ~missed & _in_window(crossing, near[rows], end[active])
         event_ray.append(rows[counted])
         event_t.append(crossing[counted])
+        event_kind.append(np.where(entering[counted], ENTERING, LEAVING).astype(np.int8))
         go = ~missed & (crossing < end[active])
         now_inside = inside[active]
         enter = go & entering & ~now_inside
@@ -331,4 +388,5 @@ def _walk(tris: Triangles, normals, ray, inside, o, d, near, far):
     t0, t1 = np.concatenate(found_t0), np.concatenate(found_t1)
     order = np.lexsort((t0, rays_out))
     return (MediumIntervals(rays_out[order], t0[order], t1[order]),
-            (np.concatenate(event_ray).astype(np.int64), np.concatenate(event_t)))
+            (np.concatenate(event_ray).astype(np.int64), np.concatenate(event_t),
+             np.concatenate(event_kind)))

@@ -19,7 +19,7 @@ from ..files import atomic_path
 
 #: What z.exr holds where no surface is hit: Cycles' own Depth-pass value for "nothing".
 SKY_DEPTH = 1e10
-_CACHE_VERSION = 2
+_CACHE_VERSION = 3
 #: The ray cache's name in a maps folder (``addon.maps.xmap``).
 CACHE_NAME = "zcache.npz"
 
@@ -53,12 +53,23 @@ class CameraRays:
     key: str = ""
     #: (h, w) bool: rays along which a volume face coincides with the first surface or
     #: with another object's volume face; Cycles resolves those ties by its rounding
-    #: (``core.maps.volume_stack``), so the X map has Cycles measure these pixels.
+    #: (``core.maps.volume_stack``), which ``addon.maps.ties`` works out or measures.
     ties: np.ndarray | None = None
+    #: (h, w) int32: for the tie rays whose one coincidence is the first surface with a face
+    #: where they leave a mesh volume (``volume_stack.surface_exit_ties``), that volume's
+    #: index in ``intervals``; -1 elsewhere.
+    tie_exit: np.ndarray | None = None
+    #: (h, w) int32: the surface triangle each ray stops at (index into the scene's surface
+    #: triangles), -1 for none or where the scene has no volume to tie with.
+    surface_face: np.ndarray | None = None
 
     def __post_init__(self):
         if self.ties is None:
             self.ties = np.zeros(self.t_far.shape, dtype=bool)
+        if self.tie_exit is None:
+            self.tie_exit = np.full(self.t_far.shape, -1, dtype=np.int32)
+        if self.surface_face is None:
+            self.surface_face = np.full(self.t_far.shape, -1, dtype=np.int32)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -164,6 +175,7 @@ def save_rays(path: str | os.PathLike, rays: CameraRays) -> Path:
         "origins": rays.origins, "directions": rays.directions, "t_near": rays.t_near,
         "t_far": rays.t_far, "hit": rays.hit, "view_axis": rays.view_axis,
         "medium_keys": np.array(list(rays.intervals), dtype=str), "ties": rays.ties,
+        "tie_exit": rays.tie_exit, "surface_face": rays.surface_face,
     }
     for i, item in enumerate(rays.intervals.values()):
         arrays[f"ray_{i}"], arrays[f"t0_{i}"], arrays[f"t1_{i}"] = item.ray, item.t0, item.t1
@@ -191,6 +203,7 @@ def load_rays(path: str | os.PathLike, key: str | None = None) -> CameraRays | N
                 window=tuple(int(v) for v in data["window"]),
                 origins=data["origins"], directions=data["directions"], t_near=data["t_near"],
                 t_far=data["t_far"], hit=data["hit"], view_axis=data["view_axis"],
-                intervals=intervals, key=str(data["key"]), ties=data["ties"])
+                intervals=intervals, key=str(data["key"]), ties=data["ties"],
+                tie_exit=data["tie_exit"], surface_face=data["surface_face"])
     except (OSError, ValueError, KeyError):
         return None

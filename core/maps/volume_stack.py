@@ -27,8 +27,11 @@ checked against renders (``tests/test_xmap_coincident.py``):
   object's volume face (a fog box resting on the floor, a water surface on a water box,
   two boxes sharing a face), whether a sample stops at the surface, leaves one medium or
   enters the other depends on Embree's rounding and traversal order: per sample a coin
-  flip whose odds (0 to 1, banded across the frame) no geometric model predicts.
-  :func:`coincident_events` finds those rays; the X map has Cycles measure them.
+  flip whose odds (0 to 1, banded across the frame) depend on single-precision roundings.
+  :func:`coincident_events` finds those rays. Where the only coincidence is the first
+  surface with a face where the ray leaves a volume (:func:`surface_exit_ties`, the fog box
+  on the floor), ``core.maps.embree_ties`` replays Embree's roundings for the odds; the
+  X map has Cycles measure the other ties.
 """
 from __future__ import annotations
 
@@ -117,3 +120,44 @@ def coincident_events(count: int, ray: np.ndarray, t: np.ndarray, owner: np.ndar
     ties[ray[1:][same_ray & close & (owner[1:] != owner[:-1])]] = True
     return ties
 
+
+#: Kinds of events along a ray (``surface_exit_ties``).
+SURFACE, ENTERING, LEAVING = 0, 1, 2
+
+
+def surface_exit_ties(count: int, ray: np.ndarray, t: np.ndarray, owner: np.ndarray,
+                      kind: np.ndarray, tolerance: float = TIE_TOLERANCE) -> np.ndarray:
+    """Rays whose one coincidence is their first surface with a face where they leave a
+    mesh volume (a fog box resting on the floor, seen from inside or through the box).
+
+    Parameters
+    ----------
+    count : int
+        Number of rays.
+    ray, t, owner : (K,) arrays
+        Every event along every ray, as for :func:`coincident_events`; a surface that is
+        also a volume's face has that medium as owner (and is never such a tie).
+    kind : (K,) array
+        ``SURFACE``, ``ENTERING`` or ``LEAVING`` (a volume face seen from behind).
+
+    Returns
+    -------
+    (count,) int32: the owner of the face left there, -1 for every other ray (no tie, or
+    another one: two volume faces, a face entered on the surface, three events at once).
+    """
+    medium = np.full(count, -1, dtype=np.int32)
+    if len(ray) < 2:
+        return medium
+    order = np.lexsort((t, ray))
+    ray, t, owner, kind = ray[order], t[order], owner[order], kind[order]
+    close = ((ray[1:] == ray[:-1]) & (owner[1:] != owner[:-1])
+             & ((t[1:] - t[:-1]) <= tolerance * np.maximum(1.0, np.abs(t[1:]))))
+    pairs = np.bincount(ray[1:][close], minlength=count)
+    first, second = np.flatnonzero(close), np.flatnonzero(close) + 1
+    kinds = np.sort(np.stack([kind[first], kind[second]], axis=1), axis=1)
+    plain = np.where(kind[first] == SURFACE, owner[first], owner[second]) == -1
+    simple = (kinds[:, 0] == SURFACE) & (kinds[:, 1] == LEAVING) & plain
+    simple &= pairs[ray[first]] == 1
+    medium[ray[first][simple]] = np.where(kind[first] == LEAVING, owner[first],
+                                          owner[second])[simple]
+    return medium
