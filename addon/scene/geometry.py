@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...core.camera import CameraModel
+from ...core.maps.embree_ties import cycles_world_vertices
 from ...core.media.grid_nodes import grid_names
 from ...core.media.ray_marching import procedural_step, voxel_step
 from ...core.media.shader_graph import ShaderGraph, uses_default_coordinates
@@ -40,10 +41,20 @@ _MESH_LIKE = ("MESH", "CURVE", "SURFACE", "FONT", "META")
 
 @dataclass
 class Triangles:
-    """World-space triangles: vertices (V, 3) float64 and vertex indices (T, 3) int32."""
+    """World-space triangles: vertices (V, 3) float64 and vertex indices (T, 3) int32.
+
+    ``exact`` holds the vertices as Cycles computes them for its BVH, in single precision
+    (``core.maps.embree_ties.cycles_world_vertices``), NaN where Cycles does otherwise
+    (a mesh several objects share is instanced; a mirrored object's winding is flipped),
+    and the triangles' vertex order is Cycles' own unless a mirror flipped ours."""
 
     vertices: np.ndarray
     triangles: np.ndarray
+    exact: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.exact is None:
+            self.exact = np.full(np.shape(self.vertices), np.nan, dtype=np.float32)
 
     @staticmethod
     def empty() -> "Triangles":
@@ -55,7 +66,8 @@ class Triangles:
             return Triangles.empty()
         offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
         return Triangles(np.concatenate([p.vertices for p in parts]),
-                         np.concatenate([p.triangles + o for p, o in zip(parts, offsets)]).astype(np.int32))
+                         np.concatenate([p.triangles + o for p, o in zip(parts, offsets)]).astype(np.int32),
+                         np.concatenate([p.exact for p in parts]))
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         used = self.vertices[np.unique(self.triangles)] if len(self.triangles) else self.vertices
@@ -115,11 +127,13 @@ def _mesh_arrays(ob, cache: dict):
 def _to_world(vertices, triangles, matrix) -> Triangles:
     m = np.asarray(matrix, dtype=np.float64)
     world = vertices @ m[:3, :3].T + m[:3, 3]
+    exact = cycles_world_vertices(vertices, m)
     if np.linalg.det(m[:3, :3]) < 0:
         # Cycles keeps normals pointing out of objects with a negative scale; so do we,
         # since the winding tells rays whether they enter or leave a volume.
         triangles = triangles[:, ::-1]
-    return Triangles(world, np.ascontiguousarray(triangles, dtype=np.int32))
+        exact = np.full_like(exact, np.nan)
+    return Triangles(world, np.ascontiguousarray(triangles, dtype=np.int32), exact)
 
 
 def _subset(vertices, triangles, keep) -> tuple[np.ndarray, np.ndarray]:
@@ -151,6 +165,7 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
     shells: dict[str, Triangles] = {}
     volume_bounds: list = []
     mesh_cache: dict = {}
+    made: dict = {}                 # mesh -> the Triangles made from it, by each user
     seen: dict[str, int] = {}
     kinds: dict = {}
     volume_objects: list = []
@@ -200,9 +215,12 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
         medium_of = np.full(len(triangles), -1, dtype=np.int32)
         for n, i in enumerate(present):
             medium_of[slot == i] = len(volumes) + n
+        users = made.setdefault(ob.data.as_pointer() if ob.type == "MESH" else ("own", len(made)), [])
+        users.append([])
         if is_surface.any():
             surfaces.append(_to_world(*_subset(vertices, triangles, is_surface), m))
             surface_medium.append(medium_of[is_surface])
+            users[-1].append(surfaces[-1])
         if present:
             volume_bounds.append(_to_world(vertices, triangles, m).bounds())
         for i in present:
@@ -226,6 +244,11 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             media.append(medium)
             volumes[key] = _to_world(*_subset(vertices, triangles, boundary), m)
             shells[key] = _to_world(*_subset(vertices, triangles, ~boundary), m)
+            users[-1] += [volumes[key], shells[key]]
+    for users in made.values():
+        if len(users) > 1:          # Cycles instances a shared mesh: rays go to object space
+            for part in (tris for user in users for tris in user):
+                part.exact = np.full_like(part.exact, np.nan)
     # Reading grids adds (and removes) a helper object: only once the walk over the
     # depsgraph's instances is over, which that would invalidate.
     for medium, original, matrix, count, interpolation in volume_objects:
