@@ -11,8 +11,8 @@ from xsl_render.core.errors import InputError
 from xsl_render.core.maps.camera_rays import (SKY_DEPTH, CameraRays, MediumIntervals,
                                               depth_from_exr, depth_to_exr, load_rays,
                                               planar_depth, ray_distance, save_rays)
-from xsl_render.core.maps.xmap import (XMapWarning, apply_minbound, luminance,
-                                       x_map_from_cached_rays)
+from xsl_render.core.maps.xmap import (XMapWarning, apply_minbound, luminance, with_ties,
+                                       x_from_transmittance, x_map_from_cached_rays)
 from xsl_render.core.media.cycles_noise import hash_uint
 from xsl_render.core.media.shader_graph import Node, ShaderGraph
 from xsl_render.core.media.shader_link import Link
@@ -230,3 +230,17 @@ def test_generated_coordinates_span_the_texture_space():
     context = NodeContext(points=np.array([[1.0, 2.0, 3.0], [3.0, 6.0, 3.5]]),
                           world_to_object=np.eye(4), texspace=((2.0, 4.0, 3.25), (1.0, 2.0, 0.25)))
     assert np.allclose(generated_coordinates(context), [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+
+
+def test_ties_scale_or_replace_the_transmittance():
+    transmittance = np.full((2, 3, 3), 0.5, dtype=np.float32)
+    passing = np.array([[0.0, 0.5, 1.0], [0.25, 0.0, 0.0]])
+    mask = np.zeros((2, 3), dtype=bool)
+    mask[1, 2] = True
+    measured = (mask, np.full((2, 3, 3), 0.125, dtype=np.float32))
+    out = with_ties(transmittance, passing, measured)
+    assert out[..., 0].tolist() == [[0.5, 0.25, 0.0], [0.375, 0.5, 0.125]]
+    assert transmittance[0, 1, 0] == 0.5                               # not modified
+    rays = rays_along_x([1.0, 2.0, 3.0], hit=np.array([True, True, False]))
+    x, value = x_from_transmittance(rays, out[:1], minbound=True)
+    assert x[0].tolist() == [0.5, 0.25, 0.25] and value == 0.25

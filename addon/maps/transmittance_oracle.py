@@ -24,6 +24,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ...core.maps.embree_ties import ORACLE_FILTER_WIDTH
 from ...core.media.volume_medium import VolumeMedium
 from ..cycles.render import render_passes
 from ..scene.shader_export import has_surface, has_volume, output_socket_input
@@ -193,7 +194,7 @@ def _oracle_settings(scene, samples: int, scale: float, step_rate: float, seed: 
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0
     c.pixel_filter_type = "BLACKMAN_HARRIS"   # a box filter ignores the width
-    c.filter_width = 0.01
+    c.filter_width = ORACLE_FILTER_WIDTH
     c.film_exposure = 1.0
     c.volume_biased = True
     c.volume_step_rate = step_rate

@@ -18,10 +18,12 @@ import numpy as np
 from ...core.maps.camera_rays import CACHE_NAME, CameraRays, load_rays, save_rays
 from ...core.maps.guided_upsample import upsample_optical_depth
 from ...core.maps.transmittance import DEFAULT_SAMPLES, DEFAULT_TOLERANCE
-from ...core.maps.xmap import XMapWarning, luminance, x_map_from_cached_rays
+from ...core.maps.xmap import (XMapWarning, luminance, with_ties, x_from_transmittance,
+                               x_map_from_cached_rays)
 from ...core.media.volume_medium import VolumeMedium
 from ..scene.geometry import geometry_digest, scan_scene
 from ..scene.probe import camera_model
+from .ties import resolve_ties
 from .zbuffer import cast_camera_rays
 
 #: Cycles fallback for media numpy cannot evaluate: fraction of the resolution, samples and
@@ -36,19 +38,6 @@ ORACLE_SAMPLES = 2
 ORACLE_STEP_RATE = 0.25
 #: ... but never fewer pixels than this on the longer side (small frames render whole).
 ORACLE_MIN_SIDE = 256
-#: The Cycles render that measures the pixels where a volume face coincides with a
-#: surface or another volume's face (``CameraRays.ties``). There each sample stops at the
-#: surface or passes it by a coin flip of Cycles' rounding, so the answer is a fraction
-#: with binomial noise: its standard deviation is at most 0.5 / sqrt(samples) of the
-#: difference between the two outcomes (0.011 at 2048 samples, 0.06 at 64). The render
-#: gets this many pixel-samples, spread over the box around those pixels, but no fewer
-#: than TIE_MIN_SAMPLES and no more than TIE_MAX_SAMPLES per pixel: a 64x36 frame gets
-#: 2048, a 512x288 one 64 (seconds of rendering where the whole floor ties).
-TIE_SAMPLE_BUDGET = 5_000_000
-TIE_MIN_SAMPLES = 64
-TIE_MAX_SAMPLES = 2048
-#: Its sampling seed: not the oracle's 0, so tests against the oracle see independent noise.
-TIE_SEED = 1
 #: Transmittance below this counts as fully opaque when turning Cycles' answer into tau.
 _MIN_TRANSMITTANCE = 1e-6
 
@@ -109,8 +98,8 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
         (``core.maps.ray_grid_depth``); None marches every pixel's ray (slow, a reference).
     tie_samples : int, optional
         Samples per pixel of the Cycles render that measures the pixels where a volume
-        face coincides with a surface or another volume's face (``CameraRays.ties``);
-        default from ``TIE_SAMPLE_BUDGET``.
+        face coincides with a surface or another volume's face (``CameraRays.ties``) and
+        ``addon.maps.ties`` cannot work the answer out; default from its budget.
 
     Returns
     -------
@@ -156,26 +145,29 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
     timings["cycles_fallback"] = time.perf_counter() - tick
 
     tick = time.perf_counter()
-    measured, ties = None, None
-    if rays.ties.any():
-        measured, ties = _measure_ties(scene, rays, tie_samples)
-    timings["ties"] = time.perf_counter() - tick
-
-    tick = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", XMapWarning)
         x, transmittance, details = x_map_from_cached_rays(
             rays, [m for m in media if m.evaluable], minbound=minbound,
-            extra_tau=extra_tau, samples=samples, tolerance=tolerance, measured=measured)
-        if ties is not None:
-            warnings.warn(ties["warning"], XMapWarning, stacklevel=2)
-            details["warnings"].append(ties["warning"])
+            extra_tau=extra_tau, samples=samples, tolerance=tolerance)
+    timings["x"] = time.perf_counter() - tick
+
+    tick = time.perf_counter()
+    ties = None
+    if rays.ties.any():
+        passing, measured, ties = resolve_ties(scene, camera, geometry, rays, transmittance,
+                                               ORACLE_STEP_RATE, tie_samples)
+        transmittance = with_ties(transmittance, passing, measured)
+        x, details["minbound"] = x_from_transmittance(rays, transmittance, minbound)
+        details["warnings"].append(ties["warning"])
+    timings["ties"] = time.perf_counter() - tick
     # Light sources and emissive surfaces need the transmittance without MinBound's fill.
     x_plain = x if not minbound else rays.full_frame(
         np.where(rays.hit, luminance(transmittance), 0.0), fill=0.0)
     for warning in caught:
         warnings.warn(str(warning.message), XMapWarning, stacklevel=2)
-    timings["x"] = time.perf_counter() - tick
+    if ties is not None:
+        warnings.warn(ties["warning"], XMapWarning, stacklevel=2)
     z = rays.full_frame(rays.distance(), fill=np.inf)
     timings["total"] = time.perf_counter() - start
     info = {
@@ -200,32 +192,6 @@ def compute_x_map_detailed(scene, cache_dir: str | Path | None = None, minbound:
         luminance(np.exp(-extra_tau)).astype(np.float32), fill=1.0)
     return XMapResult(x=x, z=z, info=info, rays=rays, media=media, x_without_minbound=x_plain,
                       cycles_transmittance=cycles_part)
-
-
-def _measure_ties(scene, rays: CameraRays, samples: int | None) -> tuple[tuple, dict]:
-    """Cycles' own transmittance at the rays whose events coincide: one render of the
-    box around them (all media, absorption only, as the oracle), at full resolution."""
-    from .transmittance_oracle import render_transmittance
-
-    ties = rays.ties
-    rows, cols = np.nonzero(ties)
-    r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
-    row0, _, col0, _ = rays.window
-    window = (int(row0 + r0), int(row0 + r1), int(col0 + c0), int(col0 + c1))
-    if samples is None:
-        area = int((r1 - r0) * (c1 - c0))
-        samples = int(np.clip(TIE_SAMPLE_BUDGET // area, TIE_MIN_SAMPLES, TIE_MAX_SAMPLES))
-    rendered, seconds = render_transmittance(scene, samples=samples, step_rate=ORACLE_STEP_RATE,
-                                             window=window, seed=TIE_SEED)
-    values = np.ones(rays.shape + (3,), dtype=np.float32)
-    values[r0:r1, c0:c1] = rendered
-    count = int(ties.sum())
-    warning = (f"{count} pixels see a volume's face lying on a surface or on another "
-               "volume's face: Cycles renders those with noise (each sample stops there or "
-               "passes by its rounding), so the X map measured them with a Cycles render; "
-               "move such faces apart by a hair to avoid both")
-    return (ties, values), {"pixels": count, "window": list(window), "samples": samples,
-                            "seconds": seconds, "warning": warning}
 
 
 def _oracle_transmittance(scene, media, scale, samples):

@@ -49,7 +49,6 @@ def apply_minbound(x: np.ndarray, sky: np.ndarray) -> tuple[np.ndarray, float | 
 def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound: bool = True,
                            extra_tau: np.ndarray | None = None, samples: int = DEFAULT_SAMPLES,
                            tolerance: float | None = DEFAULT_TOLERANCE,
-                           measured: tuple[np.ndarray, np.ndarray] | None = None,
                            ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The X map of ``media`` seen along already cast ``rays``: no ray is cast here.
 
@@ -72,10 +71,6 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
     tolerance : float or None
         Transmittance tolerance of the adaptive ray grid that integrates heterogeneous
         media (``core.maps.ray_grid_depth``); None marches every ray instead (slow; a reference).
-    measured : ((h, w) bool, (h, w, 3)) arrays, optional
-        Pixels whose transmittance was measured elsewhere and replaces ours: the rays
-        where Cycles' answer depends on how it breaks a tie between coincident faces
-        (``CameraRays.ties``), as a Cycles render gave it.
 
     Returns
     -------
@@ -103,14 +98,36 @@ def x_map_from_cached_rays(rays: CameraRays, media: list[VolumeMedium], minbound
         if extra_tau is not None:
             tau = tau + extra_tau
     transmittance = np.exp(-tau).astype(np.float32)
+    x, info["minbound"] = x_from_transmittance(rays, transmittance, minbound)
+    info["sky_pixels"] = int((~rays.hit).sum())
+    info["seconds"] = time.perf_counter() - start
+    return x, transmittance, info
+
+
+def x_from_transmittance(rays: CameraRays, transmittance: np.ndarray,
+                         minbound: bool = True) -> tuple[np.ndarray, float | None]:
+    """The X map at the whole render resolution (0 outside the window) from the
+    transmittance (h, w, 3) along ``rays``, and the MinBound value (None if unused)."""
+    x = np.clip(luminance(transmittance), 0.0, 1.0).astype(np.float32)
+    value = None
+    if minbound:
+        x, value = apply_minbound(x, ~rays.hit)
+    return rays.full_frame(x, fill=0.0), value
+
+
+def with_ties(transmittance: np.ndarray, passing: np.ndarray | None = None,
+              measured: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """The transmittance (h, w, 3) at the rays where Cycles' answer depends on how it
+    breaks a tie between coincident faces (``CameraRays.ties``).
+
+    ``passing`` (h, w) is the share of the samples that pass the first surface into
+    nothing (they count 0: the oracle's world is black); ``measured`` ((h, w) bool, (h, w,
+    3)) the pixels a Cycles render measured, whose values replace ours.
+    """
+    out = np.array(transmittance, dtype=np.float32, copy=True)
+    if passing is not None:
+        out *= (1.0 - passing)[..., None].astype(np.float32)
     if measured is not None:
         mask, values = measured
-        transmittance[mask] = values[mask]
-    x = np.clip(luminance(transmittance), 0.0, 1.0).astype(np.float32)
-    sky = ~rays.hit
-    info["sky_pixels"] = int(sky.sum())
-    info["minbound"] = None
-    if minbound:
-        x, info["minbound"] = apply_minbound(x, sky)
-    info["seconds"] = time.perf_counter() - start
-    return rays.full_frame(x, fill=0.0), transmittance, info
+        out[mask] = values[mask]
+    return out
