@@ -16,7 +16,7 @@ around those pixels, as before.
 
 Against the oracle on the fog box resting on the ground: MAE 0.008, p99 0.04 at 32x18
 (the 2048-sample measurement it replaces: 0.0064, 0.021); at 384x216, over 192x128 pixels
-of floor, MAE 0.018, p99 0.09 against a 1024-sample render whose own noise accounts for
+of floor, MAE 0.019, p99 0.094 against a 1024-sample render whose own noise accounts for
 0.008 of that (the 64-sample measurement it replaces: 0.032, 0.106).
 """
 from __future__ import annotations
@@ -40,12 +40,15 @@ TIE_MIN_SAMPLES = 64
 TIE_MAX_SAMPLES = 2048
 #: Its sampling seed: not the oracle's 0, so tests against the oracle see independent noise.
 TIE_SEED = 1
-#: Rays replayed per frame for the exact-tie fractions (at least 2, at most 2048 a pixel):
-#: 2048 a pixel on a 32x18 frame, 14 on 384x216 (pooled, ``core.maps.embree_ties``).
-REPLAY_BUDGET = 1_200_000
+#: Rays replayed for the exact-tie fractions: enough that each pixel's estimate rests on
+#: REPLAY_RAYS rays, its own or pooled from its band in cells of at most 1/POOL_WIDTH of
+#: the frame's width (``core.maps.embree_ties``), no more than REPLAY_BUDGET in all, and
+#: from REPLAY_MIN to REPLAY_MAX a pixel: 2048 a pixel on a 32x18 frame, 512 on 64x36, 8
+#: on 384x216 (0.3 us a ray).
+REPLAY_RAYS = 2048
+POOL_WIDTH = 24
+REPLAY_BUDGET = 2_000_000
 REPLAY_MIN, REPLAY_MAX = 2, 2048
-#: Pixels pool their replayed rays over at most 1/POOL_WIDTH of the frame's width.
-POOL_WIDTH = 32
 #: The probe renders that measure which face wins an exact tie: squares of PROBE_SIDE
 #: pixels, PROBE_SAMPLES samples a pixel, placed greedily so that each holds at least
 #: PROBE_MIN_PIXELS pixels of as many pairs of triangles as it can (at most PROBE_MAX
@@ -140,10 +143,12 @@ def _work_out(scene, camera, geometry, rays, transmittance, modelled, step_rate)
     if not len(rows):
         return None, keep, {}
     pair = volume_face * 10_000_000 + rays.surface_face[rows, cols]
-    per_pixel = int(np.clip(REPLAY_BUDGET // len(rows), REPLAY_MIN, REPLAY_MAX))
+    side = max(1, camera.width // POOL_WIDTH)
+    per_pixel = int(np.clip(min(REPLAY_RAYS // side ** 2, REPLAY_BUDGET // len(rows)),
+                            REPLAY_MIN, REPLAY_MAX))
     fraction = exact_tie_fractions(model, rows, cols, rays.view_axis, camera.clip_start, volume,
                                    surface, pair, per_pixel, np.random.default_rng(_REPLAY_SEED),
-                                   pool_side=max(1, camera.width // POOL_WIDTH))
+                                   pool_side=side)
     stop = luminance(transmittance[rows, cols])
     replay = (model, rays.view_axis, camera.clip_start, volume, surface)
     share, probes, shares = _probe(scene, rays, rows, cols, pair, stop, step_rate, replay)
@@ -183,20 +188,20 @@ def _probe_windows(rows, cols, pair, shape):
     pixel of the largest pair not yet held, where it holds the most pairs."""
     height, width = shape
     values, index, counts = np.unique(pair, return_inverse=True, return_counts=True)
-    index = index.ravel()
+    which = np.full(shape, len(values), dtype=np.int64)          # pair of each pixel
+    which[rows, cols] = index.ravel()
     waiting = set(np.argsort(-counts)[:PROBE_MAX * 4].tolist())
     windows = []
     while waiting and len(windows) < PROBE_MAX:
         largest = max(waiting, key=lambda k: counts[k])
-        mine = np.flatnonzero(index == largest)
+        mine = np.flatnonzero(index.ravel() == largest)
         best, best_held = None, set()
         for pick in mine[np.linspace(0, len(mine) - 1, min(len(mine), 48)).astype(int)]:
             r0 = int(np.clip(rows[pick] - PROBE_SIDE // 2, 0, max(0, height - PROBE_SIDE)))
             c0 = int(np.clip(cols[pick] - PROBE_SIDE // 2, 0, max(0, width - PROBE_SIDE)))
             window = (r0, min(height, r0 + PROBE_SIDE), c0, min(width, c0 + PROBE_SIDE))
-            inside = ((rows >= window[0]) & (rows < window[1]) & (cols >= window[2])
-                      & (cols < window[3]))
-            held = np.bincount(index[inside], minlength=len(values))
+            held = np.bincount(which[window[0]:window[1], window[2]:window[3]].ravel(),
+                               minlength=len(values) + 1)
             held = {k for k in waiting if held[k] >= min(PROBE_MIN_PIXELS, counts[k])}
             if best is None or len(held) > len(best_held):
                 best, best_held = window, held
