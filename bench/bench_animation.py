@@ -1,0 +1,197 @@
+"""Benchmark: an animation rendered in one Cycles session, and what ``guided`` gets over it.
+
+On the moving example (``street``: 24 frames at 256x144, a camera dollying through static
+noise fog past street lamps) this measures, each run a whole ``xsl-render`` process (Blender
+loading, scene syncs, maps, denoising: every fixed cost inside the time):
+
+1. **Sessions**: ``render --mode uniform --spp 16`` of the frames in one process
+   (``--frames``) against one process per frame (``--frame N``, what a farm task per frame
+   or a shell loop does): per-frame wall time and the seconds Cycles reported syncing.
+2. **Quality along the sequence**, against each frame's converged reference (``xsl-render
+   reference --frames``: 1024 spp, seed 7, denoised like every run; cached):
+   ``uniform`` (the scene's own settings) at 8..64 spp is the baseline curve; ``auto``
+   (uniform with ``--estimator auto``) at 16 spp; ``guided`` (auto estimator) at the
+   per-frame budget uniform 16 and 32 spp took; ``xsl`` (the paper's map, ceiling 64) for
+   its flicker. Per run: the means over frames of mean FLIP,
+   the 95th percentile of 32-px tile FLIP, the share of pixels above FLIP 0.103 and MSE
+   (``xsl-render compare`` on the sequences), the flicker measure, and the equal-quality
+   speedup over the uniform curve on each (time = the whole process).
+3. **Guided's overhead over its frames**: the process's wall time against the sum of its
+   frames' render-only times (wall less Cycles' sync).
+
+    .venv/bin/python bench/bench_animation.py --out bench-animation --repeats 3
+    .venv/bin/python bench/bench_animation.py --frames 1-8 --repeats 1      # a quick look
+
+Run it on an otherwise idle machine (the times are the measure).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = "street"
+UNIFORM_SPP = (8, 16, 32, 64)
+EQUAL_TIME_SPP = (16, 32)
+METRICS = ("flip", "flip_tile95", "flip_share", "mse")
+MAX_SPP = 64
+
+
+def xsl(*args) -> tuple[float, subprocess.CompletedProcess]:
+    """Run ``xsl-render ARGS`` as its own process; (wall seconds, the process)."""
+    started = time.perf_counter()
+    done = subprocess.run([str(ROOT / ".venv" / "bin" / "xsl-render"), *map(str, args)],
+                          capture_output=True, text=True)
+    seconds = time.perf_counter() - started
+    if done.returncode != 0:
+        sys.exit(f"xsl-render {' '.join(map(str, args))} failed:\n{done.stderr[-2000:]}")
+    return seconds, done
+
+
+def scene_path() -> Path:
+    return ROOT / "example_blends" / f"{SCENE}.blend"
+
+
+def render_frames(folder: Path, frames: str, *args) -> dict:
+    """One process rendering ``frames``: its wall time and per-frame stats."""
+    folder.mkdir(parents=True, exist_ok=True)
+    seconds, _ = xsl("render", scene_path(), "--frames", frames, "--max-spp", MAX_SPP, "--quiet",
+                     "--out", folder / "frame_####.exr", "--stats", folder / "stats.json", *args)
+    stats = json.loads((folder / "stats.json").read_text())
+    return {"seconds": seconds, "frames": stats["frames"]}
+
+
+def measure(reference: Path, folder: Path, frames: str) -> dict:
+    """``xsl-render compare`` of the run's frames against the references."""
+    _, _ = xsl("compare", reference / "frame_####.exr", folder / "frame_####.exr", "--frames", frames,
+               "--no-vdp", "--json", folder / "compare.json")
+    summary = json.loads((folder / "compare.json").read_text())["sequence"]
+    values = {metric: summary["mean"][metric] for metric in METRICS}
+    values["flicker"] = summary["flicker"]["flicker"]
+    return values
+
+
+def median_run(repeats: int, run) -> dict:
+    """The run of median wall time among ``repeats`` (its metrics go with it)."""
+    runs = sorted((run(index) for index in range(repeats)), key=lambda r: r["seconds"])
+    return runs[len(runs) // 2]
+
+
+def sessions(out: Path, frames: str, count: int, repeats: int) -> None:
+    from xsl_render.core.frames import parse_frame_list
+
+    listed = parse_frame_list(frames)[:count]
+    one = median_run(repeats, lambda i: render_frames(out / "sessions" / f"one_{i}", frames,
+                                                      "--mode", "uniform", "--spp", 16))
+    separate = []
+    for frame in listed:
+        times = []
+        for i in range(repeats):
+            folder = out / "sessions" / f"separate_{frame}_{i}"
+            folder.mkdir(parents=True, exist_ok=True)
+            seconds, _ = xsl("render", scene_path(), "--frame", frame, "--max-spp", MAX_SPP, "--quiet",
+                             "--mode", "uniform", "--spp", 16, "--out", folder / "f.exr",
+                             "--stats", folder / "stats.json")
+            stats = json.loads((folder / "stats.json").read_text())
+            times.append((seconds, stats["wall_s"], stats["cycles_sync_s"]))
+        separate.append(sorted(times)[len(times) // 2])
+    print(f"\n## sessions: uniform 16 spp, {SCENE} (median of {repeats})")
+    print("| frame | one process: frame wall s | Cycles sync s | own process: process s | frame wall s | sync s |")
+    print("|---|---|---|---|---|---|")
+    for index, stats in enumerate(one["frames"]):
+        own = separate[index] if index < len(separate) else None
+        tail = (f"{own[0]:.2f} | {own[1]:.2f} | {own[2]:.2f}" if own else "| |")
+        print(f"| {stats['frame']} | {stats['wall_s']:.2f} | {stats['cycles_sync_s']:.2f} | {tail} |")
+    n = len(one["frames"])
+    per_frame_separate = statistics.mean(own[0] for own in separate)
+    print(f"\nwhole sequence in one process: {one['seconds']:.1f} s for {n} frames "
+          f"({one['seconds'] / n:.2f} s a frame); a process per frame: {per_frame_separate:.2f} s a "
+          f"frame ({per_frame_separate * n:.1f} s for {n}): {per_frame_separate * n / one['seconds']:.2f}x")
+
+
+def quality(out: Path, frames: str, repeats: int) -> None:
+    from xsl_render.core.validation.curves import Point, equal_quality_speedup
+
+    reference = out / "reference"
+    xsl("reference", scene_path(), "--frames", frames, "--max-spp", MAX_SPP, "--quiet",
+        "--out", reference / "frame_####.exr")
+    runs: dict[str, dict] = {}
+
+    def run(name: str, *args) -> dict:
+        def once(i):
+            folder = out / "runs" / f"{name}_{i}"
+            result = render_frames(folder, frames, *args)
+            return result | {"folder": folder}
+
+        chosen = median_run(repeats, once)
+        chosen["metrics"] = measure(reference, chosen["folder"], frames)
+        runs[name] = chosen
+        return chosen
+
+    for spp in UNIFORM_SPP:
+        run(f"uniform_{spp}", "--mode", "uniform", "--spp", spp)
+    run("auto_16", "--mode", "uniform", "--spp", 16, "--estimator", "auto")
+    for spp in EQUAL_TIME_SPP:
+        frames_run = runs[f"uniform_{spp}"]["frames"]
+        budget = sum(stats["wall_s"] for stats in frames_run) / len(frames_run)
+        guided = run(f"guided_{spp}", "--mode", "guided", "--time-budget", f"{budget:.3f}")
+        guided["budget"] = budget
+
+    run("xsl", "--mode", "xsl")          # the paper's map, ceiling 64: its flicker
+
+    print(f"\n## quality along the sequence: {SCENE}, frames {frames} (median of {repeats}; times "
+          "are whole processes)")
+    print("| run | s | mean FLIP | p95 tile FLIP | FLIP>0.103 % | MSE | flicker |")
+    print("|---|---|---|---|---|---|---|")
+    for name, result in runs.items():
+        m = result["metrics"]
+        print(f"| {name} | {result['seconds']:.1f} | {m['flip']:.4f} | {m['flip_tile95']:.4f} | "
+              f"{m['flip_share']:.2f} | {m['mse']:.3g} | {m['flicker']:.4f} |")
+    print("\nequal-quality speedup over uniform (scene settings), each metric:")
+    for name, result in runs.items():
+        if name.startswith("uniform"):
+            continue
+        cells = []
+        for metric in METRICS + ("flicker",):
+            curve = [Point(r["seconds"], r["metrics"][metric], n) for n, r in runs.items()
+                     if n.startswith("uniform")]
+            speedup = equal_quality_speedup(curve, result["metrics"][metric], result["seconds"])
+            value = "n/a" if speedup.value is None else f"{speedup.value:.2f}x" + ("*" if speedup.extrapolated else "")
+            cells.append(f"{metric} {value}")
+        print(f"  {name}: " + ", ".join(cells))
+    for spp in EQUAL_TIME_SPP:
+        guided = runs[f"guided_{spp}"]
+        render_only = sum(stats["wall_s"] - stats.get("cycles_sync_s", 0.0) for stats in guided["frames"])
+        print(f"guided at uniform {spp}'s time ({guided['budget']:.2f} s a frame): process "
+              f"{guided['seconds']:.1f} s against {render_only:.1f} s of its frames' render-only time "
+              f"({guided['seconds'] / render_only:.3f}x); estimator steps chosen: "
+              + ", ".join(sorted({str(stats['estimator'].get('step_rate')) for stats in guided['frames']})))
+    (out / "animation.json").write_text(json.dumps(
+        {name: {k: v for k, v in r.items() if k != "folder"} for name, r in runs.items()}, indent=1,
+        default=str))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("bench-animation"))
+    parser.add_argument("--frames", default="1-24")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--separate-frames", type=int, default=4,
+                        help="frames rendered one process each for the sessions table")
+    parser.add_argument("--skip-sessions", action="store_true")
+    parser.add_argument("--skip-quality", action="store_true")
+    args = parser.parse_args(argv)
+    if not args.skip_sessions:
+        sessions(args.out, args.frames, args.separate_frames, args.repeats)
+    if not args.skip_quality:
+        quality(args.out, args.frames, args.repeats)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
