@@ -80,7 +80,7 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     chosen in the panel; or, with the Time Budget sampler, the guided render within the
     budget (its importance map computed first, inside the budget; every frame of an
     animation gets its own budget)."""
-    from ..addon.animation import estimated_frame, guided_frame, selective_frame
+    from ..addon.frame_jobs import estimated_frame, guided_frame, selective_frame
     from ..core.sampling.guided_plan import SequenceBudget
     from ..addon.maps.estimator_choice import estimator_spp
 
@@ -109,7 +109,7 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
 def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = False) -> Job:
     """Max samples everywhere: one Cycles render, or (``banded``, the panel) full-width bands
     bit-identical to it that a modal operator can stop between."""
-    from ..addon.animation import estimated_frame, single_render_frame, stepped_render_frame
+    from ..addon.frame_jobs import estimated_frame, single_render_frame, stepped_render_frame
     from ..addon.cycles.banded_gold import gold_band_steps
     from ..addon.cycles.selective_render import render_gold
 
@@ -202,7 +202,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
     """The scene's frame range, each frame written as a numbered EXR as soon as it is done."""
     import bpy
 
-    from ..addon.animation import frames_steps
+    from ..addon.frame_jobs import frames_steps
     from ..addon.panel.image_display import (GOLD_IMAGE, GOLD_SAMPLES_IMAGE, MAP_IMAGES,
                                              RENDER_IMAGE, SAMPLES_IMAGE, ensure_image, show_maps,
                                              show_render)

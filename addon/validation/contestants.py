@@ -24,7 +24,7 @@ RenderOutcome`` in ``RENDERERS`` (``budget_s`` is the time budget of a contestan
 Over frames (``curves --frames``)
 ---------------------------------
 ``run_contestant_frames`` renders a contestant over a list of frames as ``xsl-render render
---frames`` does: the same frame jobs (``addon.animation``) through ``frames_steps``, one
+--frames`` does: the same frame jobs (``addon.frame_jobs``) through ``frames_steps``, one
 Cycles session for the whole range (persistent data on, so the run pays one scene sync, not
 one per frame), xs and xsl with their camera rays cast once and reused while camera and
 geometry stay still, guided sharing the run's budget among its frames (``SequenceBudget``),
@@ -50,7 +50,7 @@ from ...core.progress import ProgressCallback
 from ...core.sampling.render_options import RenderOptions
 from ...core.progress import run_steps
 from ...core.validation.contestants import Contestant
-from ..animation import (FrameJob, FrameResult, estimated_frame, frames_steps, guided_frame,
+from ..frame_jobs import (FrameJob, FrameResult, estimated_frame, frames_steps, guided_frame,
                          selective_frame, single_render_frame)
 from ..cycles import selective_render as sr
 from ..scene.state import preserved_scene

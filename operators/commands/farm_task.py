@@ -146,7 +146,7 @@ def _map_options(args):
 
 
 def _maps(args) -> int:
-    from ...addon.farm_tasks import run_maps_task
+    from ...addon.farm.tasks import run_maps_task
     from ...addon.maps.director_maps import MapWarning
     from ...core.farm.files import FrameFiles, valid_plan
     from ...core.maps.xmap import XMapWarning
@@ -173,7 +173,7 @@ def _maps(args) -> int:
 
 
 def _tiles(args) -> int:
-    from ...addon.farm_tasks import run_tiles_task
+    from ...addon.farm.tasks import run_tiles_task
 
     frames = _frames(args)
     label = f"task {args.group}/{args.groups}"
@@ -221,7 +221,7 @@ def _composite(args) -> int:
 
 
 def _guided(args) -> int:
-    from ...addon.farm_tasks import run_guided_task
+    from ...addon.farm.tasks import run_guided_task
     from ...addon.maps.director_maps import MapWarning
     from ...core.farm.files import FrameFiles
     from ...core.maps.xmap import XMapWarning

@@ -23,7 +23,7 @@ def maps_folder(save_maps: str | Path, frame: int) -> Path:
 
 
 def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
-    from ...addon.animation import (estimated_frame, frames_steps, guided_frame, selective_frame,
+    from ...addon.frame_jobs import (estimated_frame, frames_steps, guided_frame, selective_frame,
                                     single_render_frame)
     from ...addon.maps.estimator_choice import estimator_spp
     from ...addon.maps.director_maps import MapWarning

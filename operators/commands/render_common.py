@@ -27,8 +27,8 @@ def render_baseline(scene, args, options, budget: dict, progress=None):
 
 def guided_render(scene, options, budget: dict, progress=None):
     """A guided render of the scene at its current frame: the frame job the panel and the
-    farm run (``addon.animation.guided_frame``), the importance map inside the budget."""
-    from ...addon.animation import guided_frame
+    farm run (``addon.frame_jobs.guided_frame``), the importance map inside the budget."""
+    from ...addon.frame_jobs import guided_frame
     from ...addon.maps.director_maps import MapWarning
     from ...core.maps.xmap import XMapWarning
     from ...core.progress import run_steps

@@ -12,7 +12,7 @@ the frames (or rectangles) it had not finished.
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
 ``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
 task with nothing left to do returns at once. The pixels come from
-``selective_render.render_rect`` and ``animation.guided_frame``, the same code
+``selective_render.render_rect`` and ``frame_jobs.guided_frame``, the same code
 ``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
 
@@ -34,20 +34,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
-from ..core.errors import InputError
-from ..core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
+from ...core.errors import InputError
+from ...core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
                                scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
-from ..core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
-from ..core.farm.task_groups import plan_group
-from ..core.files import atomic_path, json_digest
-from ..core.maps.camera_rays import CACHE_NAME
-from ..core.maps.files import write_map_set
-from ..core.maps.options import MapOptions
-from ..core.progress import ProgressCallback
-from ..core.sampling.guided_plan import GuidedOptions
-from ..core.sampling.render_files import frame_attributes, preview_scale
-from ..core.sampling.render_options import RenderOptions
-from ..core.sampling.tile_plan import make_plan
+from ...core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
+from ...core.farm.task_groups import plan_group
+from ...core.files import atomic_path, json_digest
+from ...core.maps.camera_rays import CACHE_NAME
+from ...core.maps.files import write_map_set
+from ...core.maps.options import MapOptions
+from ...core.progress import ProgressCallback
+from ...core.sampling.guided_plan import GuidedOptions
+from ...core.sampling.render_files import frame_attributes, preview_scale
+from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.tile_plan import make_plan
 
 Log = Callable[[str], None]
 
@@ -68,8 +68,8 @@ class TaskOutcome:
 
 def _open(scene_path, scene_name: str, frame: int, device: str | None):
     """The scene opened at ``frame`` on ``device`` (the opened copy only; never written)."""
-    from .cycles.device import use_device
-    from .scene.blend_session import open_blend
+    from ..cycles.device import use_device
+    from ..scene.blend_session import open_blend
 
     scene = open_blend(scene_path, scene_name)
     scene.frame_set(frame)
@@ -110,7 +110,7 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
                   device: str | None = None, progress: ProgressCallback | None = None) -> list[TaskOutcome]:
     """Director maps and tile plan of each of ``frames`` that has no finished plan for the same
     inputs; each plan is written as soon as its frame's maps are."""
-    from .scene.blend_session import check_blend_file
+    from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
     digest = scene_sha256(scene_path)
@@ -125,7 +125,7 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
         else:
             todo.append((files, inputs))
     if todo:
-        from .maps.director_maps import compute_maps
+        from ..maps.director_maps import compute_maps
 
         scene = _open(scene_path, scene_name, todo[0][0].frame, device)
         previous, skipped = None, len(frames) - len(todo)
@@ -155,7 +155,7 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
     """Render the rectangles of each of ``frames`` that task ``group`` of ``groups`` owns and
     that have no finished image yet, the frames one after another in one Cycles session;
     each rectangle is written (image, then record) as soon as it is rendered."""
-    from .scene.blend_session import check_blend_file
+    from ..scene.blend_session import check_blend_file
 
     log = log or (lambda line: None)
     check_blend_file(scene_path)
@@ -186,8 +186,8 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
     if not pending:
         return outcomes
 
-    from .cycles.selective_render import prepare_render, render_rect
-    from .scene.state import preserved_scene
+    from ..cycles.selective_render import prepare_render, render_rect
+    from ..scene.state import preserved_scene
 
     names = {record.scene_name for _, record, _, _ in pending}
     if len(names) > 1:
@@ -241,8 +241,8 @@ def _window_renderer(renderer, made_for: tuple | None, scene, options: RenderOpt
     """(renderer, what it was made for): one Cycles window renderer for the frames of a chunk
     (persistent data: the scene is synced once), a new one only where a frame's plan asks for
     another seed, denoising guides or size."""
-    from .cycles.tile_render import CyclesWindowRenderer
-    from .scene.probe import render_size
+    from ..cycles.tile_render import CyclesWindowRenderer
+    from ..scene.probe import render_size
 
     wanted = (options.seed, options.denoise, render_size(scene))
     if renderer is not None and made_for == wanted:
@@ -264,7 +264,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     (``core.farm.frame_outputs``) as soon as it is rendered. ``options``: the resolution,
     seed and denoising; its ``max_spp`` the ceiling the statistics report. A frame's
     ``warnings`` hold its render's (a budget overrun among them)."""
-    from .scene.blend_session import check_blend_file
+    from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
     digest = scene_sha256(scene_path)
@@ -281,10 +281,10 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
                                           seconds=time.perf_counter() - started)
     todo = [frame for frame in frames if frame not in outcomes]
     if todo:
-        from ..core.progress import run_steps, scaled_steps
-        from ..core.sampling.guided_plan import SequenceBudget
-        from .animation import estimated_frame, frames_steps, guided_frame
-        from .maps.estimator_choice import estimator_spp
+        from ...core.progress import run_steps, scaled_steps
+        from ...core.sampling.guided_plan import SequenceBudget
+        from ..frame_jobs import estimated_frame, frames_steps, guided_frame
+        from ..maps.estimator_choice import estimator_spp
 
         def on_frame(result) -> None:
             files = FrameFiles(Path(output), result.frame)

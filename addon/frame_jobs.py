@@ -1,4 +1,5 @@
-"""Frame ranges: each frame gets its own maps and render, the camera rays are cast once.
+"""Frame jobs: how one frame is rendered (maps, estimator, render), for a still and for a
+frame range alike; ranges render in one Cycles session and cast the camera rays once.
 
 The paper (4.1): the Z buffer "allows for instant recomputations of the X map if the
 description of the medium in the scene changes (such as dynamic fog or smoke)". Every
