@@ -15,7 +15,7 @@ import pytest
 
 from xsl_render.core.imageio import write_png
 from xsl_render.core.psychophysics.stimuli import scan_stimuli
-from xsl_render.operators.experiment_server import start_server
+from xsl_render.operators.experiment_web.server import start_server
 
 SECRET = "TOP-SECRET-NOT-A-STIMULUS"
 

@@ -71,7 +71,7 @@ def check(args) -> None:
 
 def run(args) -> int:
     from ...core.psychophysics.stimuli import scan_stimuli
-    from ..experiment_server import start_server
+    from ..experiment_web.server import start_server
 
     pairs = scan_stimuli(args.stimuli)
     db_path = database_path(args)

@@ -1,6 +1,6 @@
 """The 2AFC experiment as a small local web app (standard library ``http.server``).
 
-The page (``experiment_page/``) runs the procedures; this server hands it the participant's
+The page (``page/``) runs the procedures; this server hands it the participant's
 plan, serves the stimuli and stores every answer in SQLite the moment it arrives.
 
 Only what is in two fixed tables is ever served: the page's own files, and the stimuli
@@ -22,12 +22,12 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-from ..core.errors import InputError
-from ..core.psychophysics.plan import (AGE_RANGES, NO_REFERENCE, POSITIONS, QUESTIONS, TIMINGS_MS)
-from ..core.psychophysics.stimuli import StimulusPair
-from ..core.psychophysics.store import Conflict, ExperimentStore, NotFound, ParticipantPlan
+from ...core.errors import InputError
+from ...core.psychophysics.plan import (AGE_RANGES, NO_REFERENCE, POSITIONS, QUESTIONS, TIMINGS_MS)
+from ...core.psychophysics.stimuli import StimulusPair
+from ...core.psychophysics.store import Conflict, ExperimentStore, NotFound, ParticipantPlan
 
-PAGE_DIR = Path(__file__).resolve().parent / "experiment_page"
+PAGE_DIR = Path(__file__).resolve().parent / "page"
 PAGE_FILES = {
     "/": ("index.html", "text/html; charset=utf-8"),
     "/experiment.js": ("experiment.js", "text/javascript; charset=utf-8"),
