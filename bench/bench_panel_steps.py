@@ -45,7 +45,7 @@ def main() -> None:
     width, height = (int(v) for v in args.resolution.split("x"))
 
     import bpy
-    from fog_scene import build_fog_scene
+    from support.fog_scene import build_fog_scene
 
     import xsl_render
     from xsl_render.addon.cycles.banded_gold import gold_band_steps

@@ -44,7 +44,7 @@ def parse_args(argv=None):
 
 
 def load_scene(bpy, path: str | None, resolution):
-    from fog_scene import build_fog_scene
+    from support.fog_scene import build_fog_scene
 
     from xsl_render.addon.scene.blend_session import open_blend
 
@@ -55,7 +55,7 @@ def load_scene(bpy, path: str | None, resolution):
 
 def maps_for(args, width: int, height: int):
     import numpy as np
-    from fog_scene import radial_map
+    from support.fog_scene import radial_map
 
     from xsl_render.core.imageio import read_image
 

@@ -1,6 +1,6 @@
 """Benchmark: the randomized X-map oracle suite, seed by seed, and its worst seed.
 
-For each seed, the scene ``tests/random_scenes.py`` draws (64x36), X against the Cycles
+For each seed, the scene ``tests/support/random_scenes.py`` draws (64x36), X against the Cycles
 oracle as ``tests/test_xmap_random.py`` judges it: mean absolute error and 99th
 percentile over non-silhouette pixels with a surface (targets 0.01 and 0.05), the pixels
 compared, the pixels at ties (and, "model", how many of them were worked out, not measured by
@@ -40,8 +40,8 @@ def main(argv=None) -> int:
     parser.add_argument("--json", metavar="FILE", help="also write the per-seed figures as JSON")
     args = parser.parse_args(argv)
     import bpy
-    from random_scenes import build_random_scene
-    from xmap_scenes import OracleComparison
+    from support.random_scenes import build_random_scene
+    from support.xmap_scenes import OracleComparison
 
     rows = []
     print(f"{'seed':>4} {'MAE':>7} {'p99':>7} {'pixels':>6} {'ties':>5} {'model':>5} {'X s':>6} "

@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from fog_scene import build_fog_scene
+from support.fog_scene import build_fog_scene
 
 from xsl_render.core.imageio import read_image
 

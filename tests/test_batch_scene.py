@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES
-from fog_scene import build_fog_scene
+from support.fog_scene import build_fog_scene
 
 from xsl_render.core.imageio import read_image
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import OpenImageIO as oiio
 import pytest
-from fog_scene import build_fog_scene, radial_map
+from support.fog_scene import build_fog_scene, radial_map
 from test_cli_info import one_line_error
 
 from xsl_render.core.imageio import read_image, write_exr

@@ -9,7 +9,7 @@ import statistics
 import numpy as np
 import pytest
 from conftest import xsl_render_cli
-from fog_scene import saved_fog_scene
+from support.fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
 from xsl_render.core.errors import InputError

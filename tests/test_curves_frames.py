@@ -24,7 +24,7 @@ FIGURES = ("flip", "flip_tile95", "flip_share", "mse")
 @pytest.fixture(scope="module")
 def animated_blend(tmp_path_factory):
     import bpy
-    from fog_scene import build_fog_scene
+    from support.fog_scene import build_fog_scene
 
     scene = build_fog_scene(bpy, W, H)
     density = next(node for node in scene.world.node_tree.nodes

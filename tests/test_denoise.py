@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fog_scene import build_fog_scene, radial_map
+from support.fog_scene import build_fog_scene, radial_map
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
@@ -83,7 +83,7 @@ def test_a_denoise_between_renders_keeps_the_synced_scene(blender):
     pilot's) must not make the next render sync heterogeneous fog again (its octree)."""
     import time
 
-    import xmap_scenes as xs
+    import support.xmap_scenes as xs
 
     from xsl_render.addon.cycles.denoise import denoise
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from fog_scene import build_fog_scene
+from support.fog_scene import build_fog_scene
 from test_cli_info import one_line_error
 from test_ray_marching import _two_media_scene
 

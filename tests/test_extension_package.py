@@ -42,8 +42,8 @@ print("INSTALLED-AND-REGISTERED")
 import importlib
 from types import SimpleNamespace
 sys.path.insert(0, sys.argv[-2])                      # tests/: the scene and the stub layout
-from fog_scene import build_fog_scene
-from ui_stub import draw
+from support.fog_scene import build_fog_scene
+from support.ui_stub import draw
 EXT = "bl_ext.user_default.xsl_render"
 settings_dump = importlib.import_module(EXT + ".addon.scene.state").settings_dump
 scene = build_fog_scene(bpy, 32, 18, factory_reset=False)

@@ -22,7 +22,7 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 from conftest import xsl_render_cli
-from fuzz_cases import CASES, FARM, FT, HOT, OUT, RG, RX, R
+from support.fuzz_cases import CASES, FARM, FT, HOT, OUT, RG, RX, R
 
 from xsl_render.core.imageio import write_exr, write_png
 from xsl_render.operators.cli import main

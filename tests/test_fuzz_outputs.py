@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import xsl_render_cli
-from fog_scene import build_fog_scene
+from support.fog_scene import build_fog_scene
 
 from xsl_render.core.errors import InputError
 from xsl_render.core.imageio import write_exr, write_png

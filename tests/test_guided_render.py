@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fog_scene import build_fog_scene
+from support.fog_scene import build_fog_scene
 
 from xsl_render.addon.cycles.guided_render import render_guided
 from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
@@ -95,7 +95,7 @@ def test_guided_render_syncs_heterogeneous_fog_once(blender):
     rectangle of the final pass. Now no final rectangle comes near the first sync's cost."""
     import time
 
-    import xmap_scenes as xs
+    import support.xmap_scenes as xs
 
     scene = xs.base_scene(blender, 32, 18)
     scene.render.engine = "CYCLES"

@@ -8,8 +8,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from fog_scene import build_fog_scene
-from ui_stub import draw
+from support.fog_scene import build_fog_scene
+from support.ui_stub import draw
 
 from xsl_render.core.panel.settings import PRESETS, SETTING_NAMES, builtin_defaults, map_options
 
@@ -100,7 +100,7 @@ def test_panel_draws_every_setting_and_button(blender, fog):
 
 
 def test_preferences_hold_every_default(blender, addon):
-    from ui_stub import StubLayout
+    from support.ui_stub import StubLayout
 
     from xsl_render.addon.panel.preferences import XSL_AP_preferences
 

@@ -196,7 +196,7 @@ def test_auto_must_be_chosen_before_rendering():
 def _two_media_scene(bpy):
     """A noise-textured fog box (a mesh volume, step from its bounds) overlapping an
     OpenVDB smoke (step from its voxels) over a ground with props."""
-    import xmap_scenes as xs
+    import support.xmap_scenes as xs
 
     scene = xs.base_scene(bpy)
     scene.render.engine = "CYCLES"

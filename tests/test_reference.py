@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import EXAMPLES, xsl_render_cli
-from fog_scene import saved_fog_scene
+from support.fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
 from xsl_render.core.errors import Cancelled, InputError

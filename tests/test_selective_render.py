@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fog_scene import build_fog_scene, radial_map
+from support.fog_scene import build_fog_scene, radial_map
 
 from xsl_render.addon.cycles import selective_render as sr
 from xsl_render.addon.cycles.render import render_passes

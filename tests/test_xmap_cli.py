@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from xmap_scenes import add, base_scene, ground_and_props, volume_material, world_fog
+from support.xmap_scenes import add, base_scene, ground_and_props, volume_material, world_fog
 
 pytestmark = pytest.mark.blender
 

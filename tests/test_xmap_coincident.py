@@ -26,7 +26,7 @@ import math
 import numpy as np
 import pytest
 
-from xmap_scenes import (OracleComparison, add, base_scene, ground_and_props,
+from support.xmap_scenes import (OracleComparison, add, base_scene, ground_and_props,
                          noise_fog_material, volume_material)
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from xmap_scenes import (agreement, add, base_scene, cycles_depth, ground_and_props,
+from support.xmap_scenes import (agreement, add, base_scene, cycles_depth, ground_and_props,
                          noise_fog_material, smoke_volume_object, volume_material, world_fog)
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]

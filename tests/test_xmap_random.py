@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import pytest
 
-from random_scenes import build_random_scene
-from xmap_scenes import OracleComparison
+from support.random_scenes import build_random_scene
+from support.xmap_scenes import OracleComparison
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from xmap_scenes import base_scene, smoke_volume_object
+from support.xmap_scenes import base_scene, smoke_volume_object
 
 WIDTH, HEIGHT = 64, 36
 #: Where the scene's things stand: x in [-X, X], y in [Y0, Y1] (the camera looks along +y).

@@ -11,7 +11,7 @@
 """
 from __future__ import annotations
 
-from fuzz_cases import HOT, OUT, RG, RX, R
+from support.fuzz_cases import HOT, OUT, RG, RX, R
 
 LONG = "a" * 300                                  # a file name no file system here takes
 DEEP = "/".join(["b" * 200] * 25)                 # 5000 bytes of folders: past PATH_MAX

@@ -367,6 +367,6 @@ CASES = [
 
 # Issue 23's cases: files a command must not touch (the same file in and out, FIFOs, names
 # past the system's limits), in a module of their own.
-from fuzz_cases_files import FILE_CASES  # noqa: E402
+from support.fuzz_cases_files import FILE_CASES  # noqa: E402
 
 CASES += FILE_CASES
