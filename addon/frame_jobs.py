@@ -137,6 +137,17 @@ def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
     return FrameJob(render, prepare, MAP_SHARE)
 
 
+def map_frame(director_map, options: RenderOptions, mode: str, map_seconds: float = 0.0) -> FrameJob:
+    """A frame job for xs / xsl from a director map given (read from a file): the selective
+    render it drives; ``map_seconds`` (reading it) recorded as the "maps" phase."""
+
+    def render(scene, _prepared=None) -> Steps[FrameResult]:
+        outcome = yield from selective_steps(scene, director_map, options, mode, map_seconds)
+        return FrameResult(scene.frame_current, outcome)
+
+    return FrameJob(render)
+
+
 def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options: RenderOptions,
                  cache_dir=None, sequence: SequenceBudget | None = None) -> FrameJob:
     """A frame job for the guided render within ``guided.time_budget``: the importance map
@@ -196,11 +207,15 @@ def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: Rend
     return FrameJob(render, prepare, share)
 
 
-def single_render_frame(render: Callable[[object], RenderOutcome], label: str) -> FrameJob:
-    """A frame job for one ordinary render (gold, uniform, adaptive): ``render(scene)``."""
+def single_render_frame(render: Callable[[object], RenderOutcome], label: str,
+                        announce: bool = True) -> FrameJob:
+    """A frame job for one ordinary render (gold, uniform, adaptive): ``render(scene)``.
+    ``announce``: a step saying so before it (not when ``render`` reports its own progress,
+    so that a scene found wrong ends the command before any progress is shown)."""
 
     def steps(scene, _prepared=None) -> Steps[FrameResult]:
-        yield 0.0, f"{label}: rendering"
+        if announce:
+            yield 0.0, f"{label}: rendering"
         return FrameResult(scene.frame_current, render(scene))
 
     return FrameJob(steps)

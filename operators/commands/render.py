@@ -24,7 +24,7 @@ from .common import (add_estimator_arguments, add_guided_arguments, add_map_argu
                      add_scene_arguments, add_tile_arguments,
                      guided_options_from_args, map_options_from_args, render_options_from_args,
                      warnings_as_lines)
-from .render_common import render_baseline, spp_scale, summary_line
+from .render_modes import check_scene, mode_frame_job, spp_scale, summary_line
 
 NAME = "render"
 HELP = ("render the scene selectively (xs, xsl), within a time budget where the error is "
@@ -211,20 +211,6 @@ def _read_map(path: Path):
     return check_director_map(image, image.shape[1], image.shape[0])
 
 
-def _compute_map(scene, args, map_options, options):
-    """The XS or XSL map of the scene at the render size, as ``xsl-render maps`` makes it."""
-    from ...addon.maps.director_maps import MapWarning, compute_maps
-    from ...core.maps.files import write_map_set
-    from ...core.maps.xmap import XMapWarning
-
-    started = time.perf_counter()
-    with warnings_as_lines(MapWarning, XMapWarning):
-        maps = compute_maps(scene, map_options, size=options.resolution)
-    if args.save_maps:
-        write_map_set(args.save_maps, maps)
-    return maps.director(args.mode), time.perf_counter() - started
-
-
 def run(args) -> int:
     options = render_options_from_args(args)
     out = Path(args.out)
@@ -236,13 +222,17 @@ def run(args) -> int:
     director_map = _read_map(budget["map"]) if "map" in budget else None
     map_seconds = time.perf_counter() - started
 
-    from ...addon.maps.estimator_choice import estimator_spp, with_estimator_choice
+    from ...addon.maps.director_maps import MapWarning
     from ...addon.scene.blend_session import open_blend
     from ...addon.scene.state import preserved_scene
+    from ...core.maps.files import write_map_set
+    from ...core.maps.xmap import XMapWarning
+    from ...core.progress import run_steps
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
 
     scene = open_blend(args.scene, args.scene_name)
+    check_scene(scene, options, args.mode)
     if frames is not None:
         from .render_animation import render_frames
 
@@ -257,21 +247,17 @@ def run(args) -> int:
             # The frame's number is known now: its files go through the check again.
             separate_files(declared_files(args)[0], files(args, out)[1])
         try:
-            with InterruptToCancel() as interrupt:
+            with InterruptToCancel() as interrupt, warnings_as_lines(MapWarning, XMapWarning):
                 progress = interrupt.wrap(bar)
-                options = with_estimator_choice(scene, options, estimator_spp(args.mode, options, budget))
-                if "compute_maps" in budget:
-                    director_map, map_seconds = _compute_map(scene, args, budget["compute_maps"], options)
-                if args.mode in ("xs", "xsl"):
-                    from ...addon.cycles import selective_render as sr
-
-                    outcome = sr.render_selective(scene, director_map, options, progress=progress,
-                                                  mode=args.mode, map_seconds=map_seconds)
-                else:
-                    outcome = render_baseline(scene, args, options, budget, progress)
+                job = mode_frame_job(args, options, budget, director_map=director_map,
+                                     map_seconds=map_seconds, progress=progress)
+                result = run_steps(job(scene), progress)
         finally:
             if bar is not None:
                 bar.close()
+    outcome = result.outcome
+    if args.save_maps and result.maps is not None:
+        write_map_set(args.save_maps, result.maps)
     for warning in outcome.warnings:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     stats = outcome.stats

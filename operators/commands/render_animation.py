@@ -23,9 +23,7 @@ def maps_folder(save_maps: str | Path, frame: int) -> Path:
 
 
 def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
-    from ...addon.frame_jobs import (estimated_frame, frames_steps, guided_frame, selective_frame,
-                                    single_render_frame)
-    from ...addon.maps.estimator_choice import estimator_spp
+    from ...addon.frame_jobs import frames_steps
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
     from ...core.sampling.guided_plan import SequenceBudget
@@ -35,21 +33,14 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
     from .common import warnings_as_lines
-    from .render_common import render_baseline, spp_scale, summary_line
+    from .render_modes import mode_frame_job, spp_scale, summary_line
 
     save_maps = Path(args.save_maps) if args.save_maps else None
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
 
     sequence = SequenceBudget(budget["guided"].time_budget, len(frames)) if args.mode == "guided" else None
 
-    def frame_job(frame_options):
-        if args.mode in ("xs", "xsl"):
-            return selective_frame(budget["compute_maps"], frame_options, args.mode, cache_dir)
-        if args.mode == "guided":
-            return guided_frame(budget["guided"], budget["map_options"], frame_options, cache_dir, sequence)
-        return single_render_frame(lambda s: render_baseline(s, args, frame_options, budget), args.mode)
-
-    job = estimated_frame(frame_job, options, estimator_spp(args.mode, options, budget))
+    job = mode_frame_job(args, options, budget, cache_dir, sequence)
 
     def on_frame(result) -> dict:
         path = Path(frame_path(str(out), result.frame))
