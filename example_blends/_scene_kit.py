@@ -194,6 +194,28 @@ def add_light(name: str, kind: str, location, energy: float, color=(1.0, 1.0, 1.
 # Materials
 
 
+def add_street_lamps(lamps, height: float, arm: float, color, energy: float) -> None:
+    """Street lamps: for each (number, x, y) a metal pole at (x, y) whose arm reaches ``arm``
+    over the road (toward x = 0), a bulb seen by the camera only and the point light inside it
+    (``Lamp.N.Pole``, ``Lamp.N.Bulb``, ``Lamp.N``)."""
+    metal = surface_material("Lamp Metal", (0.12, 0.12, 0.13), roughness=0.4, metallic=1.0)
+    bulb = emission_material("Lamp Bulb", color, strength=25.0)
+    for number, x, y in lamps:
+        toward_road = -1.0 if x > 0 else 1.0
+        head_x = x + toward_road * arm
+
+        def pole(bm, head_x=head_x, x=x, y=y):
+            cylinder(0.08, height, segments=12, center=(x, y, height / 2))(bm)
+            box(bm, (arm + 0.1, 0.1, 0.1), ((x + head_x) / 2, y, height - 0.05))
+            box(bm, (0.5, 0.3, 0.12), (head_x, y, height - 0.1))
+        mesh_object(f"Lamp.{number}.Pole", pole, metal)
+        seen_by_camera_only(mesh_object(
+            f"Lamp.{number}.Bulb", uv_sphere(0.12, 16, 8), bulb,
+            location=(head_x, y, height - 0.28), smooth=True))
+        add_light(f"Lamp.{number}", "POINT", location=(head_x, y, height - 0.28),
+                  energy=energy, color=color, radius=0.12)
+
+
 def _fresh_tree(material):
     nt = material.node_tree
     nt.nodes.clear()

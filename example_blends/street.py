@@ -124,22 +124,7 @@ def add_car():
 
 
 def add_lamps():
-    metal = kit.surface_material("Lamp Metal", (0.12, 0.12, 0.13), roughness=0.4, metallic=1.0)
-    bulb = kit.emission_material("Lamp Bulb", LAMP_COLOR, strength=25.0)
-    for number, x, y in LAMPS:
-        toward_road = -1.0 if x > 0 else 1.0
-        head_x = x + toward_road * LAMP_ARM
-
-        def pole(bm, head_x=head_x, x=x, y=y):
-            kit.cylinder(0.08, LAMP_HEIGHT, segments=12, center=(x, y, LAMP_HEIGHT / 2))(bm)
-            kit.box(bm, (LAMP_ARM + 0.1, 0.1, 0.1), ((x + head_x) / 2, y, LAMP_HEIGHT - 0.05))
-            kit.box(bm, (0.5, 0.3, 0.12), (head_x, y, LAMP_HEIGHT - 0.1))
-        kit.mesh_object(f"Lamp.{number}.Pole", pole, metal)
-        kit.seen_by_camera_only(kit.mesh_object(
-            f"Lamp.{number}.Bulb", kit.uv_sphere(0.12, 16, 8), bulb,
-            location=(head_x, y, LAMP_HEIGHT - 0.28), smooth=True))
-        kit.add_light(f"Lamp.{number}", "POINT", location=(head_x, y, LAMP_HEIGHT - 0.28),
-                      energy=500.0, color=LAMP_COLOR, radius=0.12)
+    kit.add_street_lamps(LAMPS, LAMP_HEIGHT, LAMP_ARM, LAMP_COLOR, energy=500.0)
 
 
 def add_sign():
