@@ -79,18 +79,23 @@ def _guiding(scene, contestant: Contestant, options: RenderOptions, budget_s, pr
     """Uniform sampling with Cycles' path guiding on (surface and volume guiding as the
     scene has them, Blender's defaults: both on). Whether Cycles really used it shows in
     the image: the curves job compares it with the uniform run of the same samples and seed."""
-    import _cycles
-
     with preserved_scene(scene):
         scene.cycles.use_guiding = True
         outcome = sr.render_uniform(scene, options, spp=int(contestant.params["spp"]), progress=progress)
-        outcome.stats["path_guiding"] = {
-            "use_guiding": bool(scene.cycles.use_guiding),
+        outcome.stats["path_guiding"] = _guiding_settings(scene)
+    return outcome
+
+
+def _guiding_settings(scene) -> dict:
+    """What the stats record about path guiding: the scene's switches and whether this
+    Cycles was built with it."""
+    import _cycles
+
+    return {"use_guiding": bool(scene.cycles.use_guiding),
             "use_surface_guiding": bool(scene.cycles.use_surface_guiding),
             "use_volume_guiding": bool(scene.cycles.use_volume_guiding),
             "built_with_path_guiding": bool(getattr(_cycles, "with_path_guiding", False)),
             "device": scene.cycles.device}
-    return outcome
 
 
 def _selective(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
@@ -187,8 +192,6 @@ def _adaptive_frames(contestant: Contestant, options: RenderOptions, budget_s, c
 
 def _guiding_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
     """Uniform frames with path guiding switched on once for the whole run (``_guiding``)."""
-    import _cycles
-
     spp = int(contestant.params["spp"])
 
     def setup(scene) -> None:
@@ -196,12 +199,7 @@ def _guiding_frames(contestant: Contestant, options: RenderOptions, budget_s, co
 
     def render(scene) -> sr.RenderOutcome:
         outcome = sr.render_uniform(scene, options, spp=spp)
-        outcome.stats["path_guiding"] = {
-            "use_guiding": bool(scene.cycles.use_guiding),
-            "use_surface_guiding": bool(scene.cycles.use_surface_guiding),
-            "use_volume_guiding": bool(scene.cycles.use_volume_guiding),
-            "built_with_path_guiding": bool(getattr(_cycles, "with_path_guiding", False)),
-            "device": scene.cycles.device}
+        outcome.stats["path_guiding"] = _guiding_settings(scene)
         return outcome
 
     return single_render_frame(render, "path guiding"), setup
