@@ -232,6 +232,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
         maps = outcome.stats.get("maps", {})
         return {"frame": result.frame, "path": path, "mean_spp": outcome.stats["mean_spp"],
                 "wall_s": outcome.stats["wall_s"], "time_budget_s": outcome.stats.get("time_budget_s"),
+                "sequence_budget": outcome.stats.get("sequence_budget"),
                 "ray_cache_hit": maps.get("ray_cache_hit"), "warnings": list(outcome.warnings)
                 + list(maps.get("warnings", []))}
 
