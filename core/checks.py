@@ -2,10 +2,12 @@
 files to read and places to write.
 
 Every check raises InputError with one line that names the problem, and never writes
-anything that outlasts it. ``name`` (an option such as ``--max-spp``) starts the message;
-without it the message starts with "must" or names the path, for the command line's
-argument converters (``operators/commands/argtypes.py``), which put ``argument --max-spp:``
-in front themselves.
+anything that outlasts it. ``name`` (what the user knows the value as, "the output path")
+starts the message; given as a ``Field`` (``Field("max_spp")``, a setting's field name) a
+number or size check raises a SettingError naming that setting, which each front end words
+its own way (``core.errors``). Without a name the message starts with "must" or names the
+path, for the command line's argument converters (``operators/commands/argtypes.py``),
+which put ``argument --max-spp:`` in front themselves.
 
 Blender's limits are copied here so that the checks run without loading Blender;
 ``tests/test_checks.py`` compares them with Blender's own property ranges.
@@ -19,7 +21,7 @@ import stat
 from pathlib import Path
 
 from . import temporaries
-from .errors import InputError
+from .errors import Field, InputError, SettingError, setting_refused, verbatim
 
 INT32_MIN, INT32_MAX = -2**31, 2**31 - 1
 #: ``scene.cycles.samples``: at most 2^24 samples per pixel.
@@ -40,16 +42,24 @@ def _say(name: str | None, text: str) -> str:
     return f"{name} {text}" if name else text
 
 
+def _refused(name: str | None, value, text: str) -> InputError:
+    """The error of a value refused with ``text``: naming the setting when ``name`` is a
+    ``Field``, else as :func:`_say` words it."""
+    if isinstance(name, Field):
+        return setting_refused(name, value, text)
+    return InputError(_say(name, text))
+
+
 def _from_text(value, parse, name: str | None, what: str):
     """``value`` parsed when it is text; a bool is refused (Python counts it as a number)."""
     if isinstance(value, bool):
-        raise InputError(_say(name, f"must be {what}, not {value}"))
+        raise _refused(name, value, f"must be {what}, not {value}")
     if not isinstance(value, str):
         return value
     try:
         return parse(value.strip())
     except ValueError:
-        raise InputError(_say(name, f"must be {what}, not '{value}'")) from None
+        raise _refused(name, value, f"must be {what}, not '{value}'") from None
 
 
 def whole_number(value, lo: int = INT32_MIN, hi: int = INT32_MAX, name: str | None = None,
@@ -59,9 +69,9 @@ def whole_number(value, lo: int = INT32_MIN, hi: int = INT32_MAX, name: str | No
     try:
         value = operator.index(value)       # int, numpy integers
     except TypeError:
-        raise InputError(_say(name, f"must be a whole number, not {value!r}")) from None
+        raise _refused(name, value, f"must be a whole number, not {value!r}") from None
     if not lo <= value <= hi:
-        raise InputError(_say(name, f"must be a whole number from {lo} to {hi}{limit}, not {value}"))
+        raise _refused(name, value, f"must be a whole number from {lo} to {hi}{limit}, not {value}")
     return value
 
 
@@ -74,17 +84,17 @@ def finite_number(value, lo: float | None = None, hi: float | None = None, *,
     try:
         value = float(value)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(_say(name, f"must be a finite number, not {value!r}")) from None
+        raise _refused(name, value, f"must be a finite number, not {value!r}") from None
     if not math.isfinite(value):
-        raise InputError(_say(name, f"must be a finite number, not {value}"))
+        raise _refused(name, value, f"must be a finite number, not {value}")
     if lo is not None and value < lo:
-        raise InputError(_say(name, f"must be at least {lo:g}, not {value:g}"))
+        raise _refused(name, value, f"must be at least {lo:g}, not {value:g}")
     if hi is not None and value > hi:
-        raise InputError(_say(name, f"must be at most {hi:g}, not {value:g}"))
+        raise _refused(name, value, f"must be at most {hi:g}, not {value:g}")
     if above is not None and not value > above:
-        raise InputError(_say(name, f"must be greater than {above:g}, not {value:g}"))
+        raise _refused(name, value, f"must be greater than {above:g}, not {value:g}")
     if below is not None and not value < below:
-        raise InputError(_say(name, f"must be less than {below:g}, not {value:g}"))
+        raise _refused(name, value, f"must be less than {below:g}, not {value:g}")
     return value
 
 
@@ -104,47 +114,51 @@ def _bytes(count: float) -> str:
     return ""
 
 
-def frame_size(width: int, height: int, name: str | None = "--resolution") -> tuple[int, int]:
+def frame_size(width: int, height: int, name: str | None = Field("resolution")) -> tuple[int, int]:
     """(width, height) if Blender can render a frame of that size here: each side 4 to 65536
     pixels (Blender's limits; it would silently render 1x1 as 4x4) and the frame small enough
     for this machine's memory (:data:`BYTES_PER_PIXEL`)."""
     for side in (width, height):
         if not MIN_SIDE <= side <= MAX_SIDE:
-            raise InputError(_say(name, f"{width}x{height}: each side must be {MIN_SIDE} to "
-                                        f"{MAX_SIDE} pixels (Blender's limits)"))
+            raise _refused(name, f"{width}x{height}", f"{width}x{height}: each side must be "
+                                                      f"{MIN_SIDE} to {MAX_SIDE} pixels (Blender's limits)")
     return fits_in_memory(width, height, name)
 
 
-def fits_in_memory(width: int, height: int, name: str | None = "--resolution") -> tuple[int, int]:
+def fits_in_memory(width: int, height: int, name: str | None = Field("resolution")) -> tuple[int, int]:
     """(width, height) unless a frame that size cannot fit in this machine's memory."""
     memory = physical_memory()
     needed = width * height * BYTES_PER_PIXEL
     if memory is not None and needed > memory:
-        raise InputError(_say(name, f"{width}x{height} needs at least {_bytes(needed)} of memory; "
-                                    f"this machine has {_bytes(memory)}"))
+        raise _refused(name, f"{width}x{height}", f"{width}x{height} needs at least {_bytes(needed)} "
+                                                  f"of memory; this machine has {_bytes(memory)}")
     return width, height
 
 
-def parse_frame_size(text: str, name: str | None = "--resolution") -> tuple[int, int]:
+def parse_frame_size(text: str, name: str | None = Field("resolution")) -> tuple[int, int]:
     """'512x288' -> (512, 288), checked as :func:`frame_size`."""
     parts = str(text).strip().lower().split("x")
     try:
         width, height = (int(part) for part in parts)
     except ValueError:
-        raise InputError(_say(name, f"must look like 512x288, not '{text}'")) from None
+        raise _refused(name, text, f"must look like 512x288, not '{text}'") from None
     return frame_size(width, height, name)
 
 
 def name_list(text: str, name: str, choices=None, what: str = "name") -> tuple[str, ...]:
     """'a, b,' -> ('a', 'b'): the names of a comma-separated option (``--scenes``,
     ``--variants``, ``--curves``). Blanks around names and empty items go, so a trailing comma
-    is harmless; nothing left is an InputError, and so is a name not among ``choices``."""
+    is harmless; nothing left is an InputError, and so is a name not among ``choices``.
+    ``name``: the option's name, or its ``Field``."""
     items = tuple(item.strip() for item in str(text).split(",") if item.strip())
     if not items:
-        raise InputError(f"{name} is empty")
+        raise _refused(name, text, "is empty")
     for item in items:
         if choices is not None and item not in choices:
-            raise InputError(f"{name}: unknown {what} '{item}' (choose from {', '.join(choices)})")
+            unknown = f"unknown {what} '{item}' (choose from {', '.join(choices)})"
+            if isinstance(name, Field):
+                raise SettingError(f"{{{name}.name}}: {verbatim(unknown)}", **{name: text})
+            raise InputError(f"{name}: {unknown}")
     return items
 
 
