@@ -18,8 +18,9 @@ Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(p
 - ``INTERRUPTIBLE`` (default False): Ctrl-C raises KeyboardInterrupt in the command (a server
   that shuts down cleanly) instead of cancelling it (``signals.py``).
 
-Exit codes: 0 success, 2 bad input (one line on stderr, no traceback), 130 cancelled (143 for
-SIGTERM), 1 an unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
+Exit codes: 0 success, 2 bad input (one line on stderr, no traceback; a setting is named by
+its option, ``commands/setting_flags.py``), 130 cancelled (143 for SIGTERM), 1 an
+unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
 """
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ from ..core.checks import separate_files
 from ..core.errors import InputError
 from ..core.files import output_set
 from .commands.argtypes import declared_files, file_options, register_safe_numbers
+from .commands.setting_flags import in_flags
 from .console import blender_chatter_to_log
 from .signals import EXIT_CODES
 
@@ -102,7 +104,7 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
     try:
         args = build_parser(in_blender).parse_args(argv)
     except InputError as error:
-        print(f"xsl-render: error: {error}", file=sys.stderr)
+        print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
         return 2
     except SystemExit as done:          # --help
         return int(done.code or 0)
@@ -112,7 +114,7 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
         if hasattr(command, "check"):
             command.check(args)
     except InputError as error:
-        print(f"xsl-render: error: {error}", file=sys.stderr)
+        print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
         return 2
     interruptible = watcher is not None and getattr(command, "INTERRUPTIBLE", False)
     if interruptible:
@@ -127,7 +129,7 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
         except _Failed as failed:
             code = failed.code
         except InputError as error:
-            print(f"xsl-render: error: {error}", file=sys.stderr)
+            print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
             code = 2
         except KeyboardInterrupt:
             print("xsl-render: cancelled", file=sys.stderr)

@@ -10,7 +10,8 @@
   call returns (progress lines on stderr in the background), so batch scripts see the images
   and files when ``bpy.ops.xsl.*()`` returns.
 
-Either way: bad input (``InputError``) is one ERROR report, a cancel one WARNING, and only
+Either way: bad input (``InputError``) is one ERROR report, naming settings by their panel
+labels (``addon/panel/setting_labels.py``), a cancel one WARNING, and only
 a bug of ours prints a traceback (with ``XSL_DEBUG=1``; otherwise its one-line summary).
 """
 from __future__ import annotations
@@ -21,6 +22,7 @@ import warnings
 
 import bpy
 
+from ..addon.panel.setting_labels import in_panel_words
 from ..core.errors import Cancelled, InputError
 from ..core.progress import StepRunner, run_steps
 from .jobs import Job, JobResult
@@ -184,7 +186,7 @@ class JobOperator:
         try:
             job = self.make_job(context, modal)
         except InputError as error:
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, in_panel_words(error))
             return None
         _running["label"] = job.label
         status = _status(context)
@@ -231,7 +233,7 @@ class JobOperator:
 
     def _failed(self, context, job: Job, error: BaseException):
         if isinstance(error, InputError):
-            message = str(error)
+            message = in_panel_words(error)
         elif isinstance(error, (Cancelled, KeyboardInterrupt)):
             message = f"{job.label} cancelled; the scene is as it was"
             self.report({"WARNING"}, message)

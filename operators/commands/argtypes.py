@@ -24,6 +24,7 @@ import argparse
 
 from ...core import checks
 from ...core.errors import InputError
+from .setting_flags import in_flags
 
 
 def _converter(function, label: str, keep_text: bool = False, role: str | None = None):
@@ -34,7 +35,7 @@ def _converter(function, label: str, keep_text: bool = False, role: str | None =
         try:
             value = function(text)
         except InputError as error:
-            raise argparse.ArgumentTypeError(str(error)) from None
+            raise argparse.ArgumentTypeError(in_flags(error)) from None
         return text if keep_text else value
     convert.__name__ = label                # argparse names the type in some messages
     convert.role = role

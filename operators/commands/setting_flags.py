@@ -1,0 +1,36 @@
+"""How the command line names a setting in an error message: by its option (``--min-spp``).
+
+Core and the add-on raise ``SettingError`` naming settings by their fields (``min_spp``,
+``core.errors``); an option's argparse ``dest`` is the field it fills, and argparse derives
+that dest from the option (``--min-spp`` -> ``min_spp``), so the option is the dest read
+back. :data:`FIELD_FLAGS` names the few fields whose option is called otherwise.
+``tests/test_setting_errors.py`` checks both against every option of every command.
+"""
+from __future__ import annotations
+
+from ...core.errors import InputError, SettingError
+
+#: Fields whose option is not their name read as a flag: field -> option.
+FIELD_FLAGS = {
+    "ceiling": "--max-spp",             # CurvesSettings, the contestants' and references' ceiling
+    "exponent": "--guided-exponent",    # GuidedOptions
+    "longest_side": "--size",           # ValidationSettings
+    "setup": "--worker-setup",          # WorkerSetup (farm)
+    "package": "--worker-package",
+    "python": "--worker-python",        # no option sets these two yet (their defaults hold);
+    "cache": "--worker-cache",          # named as the worker's other options are
+}
+
+
+def flag(field: str) -> str:
+    """The option that sets ``field``: ``min_spp`` -> ``--min-spp``, argparse's rule for a
+    dest read backwards, unless :data:`FIELD_FLAGS` says otherwise."""
+    return FIELD_FLAGS.get(field) or "--" + field.replace("_", "-")
+
+
+def in_flags(error: InputError) -> str:
+    """``error``'s one line as the command line says it: each setting named by its option
+    ("--min-spp 8 is larger than --max-spp 4")."""
+    if isinstance(error, SettingError):
+        return error.worded({field: flag(field) for field in error.values})
+    return str(error)
