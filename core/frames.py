@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 
 from .checks import MAX_FRAME, MIN_FRAME
-from .errors import InputError
+from .errors import SettingError, verbatim
 
 EXTENSION = ".exr"
 #: Digits Blender pads an appended frame number to.
@@ -36,18 +36,19 @@ def parse_frame_range(text: str) -> range:
     """
     match = _RANGE.match(str(text))
     if not match:
-        raise InputError(f"--frames must look like START-END or START-END:STEP, or a list of "
-                         f"them such as 1-3,8 (got '{text}')")
+        raise SettingError("{frames.name} must look like START-END or START-END:STEP, or a list "
+                           "of them such as 1-3,8 (got '{frames.value}')", frames=text)
     start = int(match.group(1))
     end = int(match.group(2)) if match.group(2) is not None else start
     step = int(match.group(3)) if match.group(3) is not None else 1
     if end < start:
-        raise InputError(f"--frames {text}: the end frame {end} is before the start frame {start}")
+        raise SettingError(f"{{frames}}: the end frame {end} is before the start frame {start}",
+                           frames=text)
     if step < 1:
-        raise InputError(f"--frames {text}: the step must be at least 1")
+        raise SettingError("{frames}: the step must be at least 1", frames=text)
     if not (MIN_FRAME <= start and end <= MAX_FRAME and step <= MAX_FRAME - MIN_FRAME):
-        raise InputError(f"--frames {text}: frames must lie between {MIN_FRAME} and {MAX_FRAME} "
-                         "(Blender's limits)")
+        raise SettingError(f"{{frames}}: frames must lie between {MIN_FRAME} and {MAX_FRAME} "
+                           "(Blender's limits)", frames=text)
     return range(start, end + 1, step)
 
 
@@ -55,7 +56,7 @@ def parse_frame_list(text: str) -> tuple[int, ...]:
     """``"1-3,8"``, ``"1-250:2,300"``, ``"7"`` (``parse_frame_range`` items joined by commas)
     -> the frames in ascending order.
 
-    Raises InputError (naming ``--frames``) for a bad item, or for two items whose spans
+    Raises InputError (naming the ``frames`` setting) for a bad item, or for two items whose spans
     overlap (``1-3,2``; also ``1-9:2,2-8:2``, which share no frame): Open Job Description
     refuses overlapping ranges, so the command line refuses them first.
     """
@@ -77,11 +78,12 @@ def _items(text: str) -> list[tuple[str, range]]:
     """(item text, its range) of each comma-separated item, by start frame; spans disjoint."""
     texts = str(text).split(",")
     if len(texts) > 1 and any(not item.strip() for item in texts):
-        raise InputError(f"--frames {text}: an empty item between commas")
+        raise SettingError("{frames}: an empty item between commas", frames=text)
     items = sorted(((item, parse_frame_range(item)) for item in texts), key=lambda i: i[1].start)
     for (before, first), (after, second) in zip(items, items[1:]):
         if second.start <= first.stop - 1:
-            raise InputError(f"--frames {text}: {before.strip()} and {after.strip()} overlap")
+            raise SettingError(f"{{frames}}: {verbatim(before.strip())} and "
+                               f"{verbatim(after.strip())} overlap", frames=text)
     return items
 
 

@@ -11,6 +11,7 @@ import pytest
 import yaml
 from openjd.model import (StepParameterSpaceIterator, create_job, decode_job_template,
                           preprocess_job_parameters)
+from support.cli_wording import refused_in_flags
 
 from xsl_render.core.errors import InputError
 from xsl_render.core.farm.composite import composite_frame
@@ -73,7 +74,7 @@ def test_balance_on_many_small_rectangles_is_close_to_perfect():
 @pytest.mark.parametrize("group,groups,message", [(0, 3, "--group"), (4, 3, "--group"),
                                                   (1, 0, "--tasks-per-frame"), (1, 10001, "--tasks-per-frame")])
 def test_bad_group_numbers(group, groups, message):
-    with pytest.raises(InputError, match=message):
+    with refused_in_flags(message):
         plan_group(random_plan(0).rects, group, groups, 1024)
 
 
@@ -87,7 +88,7 @@ def test_parse_frames(text, expected):
 
 @pytest.mark.parametrize("text", ["", "a-b", "9-3", "1-5:0", "1-"])
 def test_parse_frames_refuses(text):
-    with pytest.raises(InputError, match="--frames"):
+    with refused_in_flags("--frames"):
         parse_frames(text)
 
 
@@ -177,7 +178,7 @@ def test_frames_per_task_chunks_every_step_and_a_chunk_expands_to_a_frame_list(t
     renders = job_tasks(decoded(job_template(guided)), openjd_values(parameter_values(guided)),
                         tmp_path)["Render"]
     assert len(renders) == 8 and renders[0]["Frame"] == "1-31:2"     # 125 frames in 8 chunks
-    with pytest.raises(InputError, match="--frames-per-task must be between 1 and 1000"):
+    with refused_in_flags("--frames-per-task must be between 1 and 1000"):
         job_template(replace(job, frames_per_task=0))
 
 
@@ -199,7 +200,7 @@ def test_parameter_values_override_and_an_absolute_output_has_no_default(tmp_pat
     ({"frames": "4-1"}, "--frames"), ({"map_options": MapOptions(wx=-1)}, "--wx"),
 ])
 def test_bad_farm_jobs(tmp_path, changes, message):
-    with pytest.raises(InputError, match=message):
+    with refused_in_flags(message):
         job_template(farm_job(tmp_path, **changes))
 
 
@@ -250,7 +251,7 @@ def test_guided_template_is_one_task_per_chunk_with_every_knob_a_parameter(tmp_p
     ({"mode": "xsl"}, "--time-budget is for --mode guided"),
 ])
 def test_bad_guided_farm_jobs(tmp_path, changes, message):
-    with pytest.raises(InputError, match=message):
+    with refused_in_flags(message):
         job_template(replace(guided_job(tmp_path), **changes))
 
 

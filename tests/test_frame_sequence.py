@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.cli_wording import refused_in_flags
 
 from xsl_render.core.errors import InputError
 from xsl_render.core.imageio import write_exr
@@ -75,6 +76,6 @@ def test_bad_sequences_are_refused_naming_the_frame(tmp_path, case, words):
         write_sequence(test, [2], size=(H, W + 2))
     elif case == "channels":
         write_exr(test / "frame_0002.exr", np.zeros((H, W, 4), np.float32))
-    with pytest.raises(InputError, match=words):
+    with refused_in_flags(words):
         pairs = match_frames(find_frames(str(ref), "REF", frames), find_frames(str(test), "TEST", frames), frames)
         check_frames(pairs)

@@ -145,7 +145,7 @@ def test_normalise_empty_map_is_zero_not_nan():
 
 @pytest.mark.parametrize("n, sigma_base", [(-1, 4.0), (3, 0.0), (3, -2.0), (3, float("nan"))])
 def test_bad_parameters_name_the_option(n, sigma_base):
-    with pytest.raises(InputError, match="light-n|light-sigma-base"):
+    with pytest.raises(InputError, match="light_n|light_sigma_base"):
         multi_gaussian(np.zeros((8, 8)), n, sigma_base)
 
 

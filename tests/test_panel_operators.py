@@ -294,16 +294,30 @@ def test_bad_input_is_a_reason_or_a_report_never_a_traceback(blender, fog, monke
         monkeypatch.undo()
     assert "Render 'XSL Gold' and 'XSL Render' first" in poll_message(blender, "compare")
 
+    # Settings are named by their labels in the panel, not by the command line's flags.
     fog.xsl_render.min_spp = 8                                 # above max_spp = 4
-    assert "--min-spp 8 is larger than --max-spp 4" in poll_message(blender, "render_selective")
+    assert "Min Samples (8) is larger than Max Samples (4)" in poll_message(blender, "render_selective")
     fog.xsl_render.min_spp = 1
     fog.xsl_render.wx = fog.xsl_render.ws = 0.0
-    assert "--wx and --ws cannot both be 0" in poll_message(blender, "compute_maps")
+    assert "X Weight and S Weight cannot both be 0" in poll_message(blender, "compute_maps")
     fog.xsl_render.wx = 0.5
     fog.xsl_render.tile_size = 64                               # larger than the 48x27 frame
-    assert "--tile-size 64 is larger than the 48x27 frame" in poll_message(blender, "render_selective")
+    assert "Tile Size (64) is larger than the 48x27 frame" in poll_message(blender, "render_selective")
     assert job_operator.running_label() is None
     assert "Traceback" not in capfd.readouterr().err
+
+
+def test_errors_name_settings_by_the_labels_the_panel_shows(blender, addon):
+    from xsl_render.addon.panel.setting_labels import in_panel_words, panel_labels
+    from xsl_render.core.errors import SettingError
+    from xsl_render.core.panel.settings import SETTINGS
+
+    labels = panel_labels()                                    # read from the property group's RNA
+    assert {setting.name: labels[setting.name] for setting in SETTINGS} == \
+        {setting.name: setting.label for setting in SETTINGS}
+    assert labels["estimator"] == "Volume Estimator"           # RenderOptions.estimator
+    assert in_panel_words(SettingError("{tile_quantile} and {min_spp}", tile_quantile=2,
+                                       min_spp=8)) == "tile_quantile (2) and Min Samples (8)"
 
 
 def test_presets_follow_the_paper_and_defaults_come_back(blender, fog):
@@ -426,11 +440,12 @@ def test_bad_time_budgets_are_refused_before_any_render(blender, budget_fog, cap
     assert settings.time_budget == pytest.approx(0.1)         # the field's own floor
     # Values that reach the settings past the field (a script writing the stored value, an
     # old file): refused with one line, nothing rendered.
-    for value, message in ((0.0, "--time-budget must be a positive number of seconds"),
-                           (-2.0, "--time-budget must be a positive number of seconds"),
-                           (float("nan"), "--time-budget must be a positive number of seconds"),
-                           (1e9, "is more than a week")):
+    for value, message in ((0.0, "Time Budget must be a positive number of seconds (got 0.0)"),
+                           (-2.0, "Time Budget must be a positive number of seconds (got -2.0)"),
+                           (float("nan"), "Time Budget must be a positive number of seconds (got nan)"),
+                           (1e9, "Time Budget (1e+09 s) is more than a week")):
         settings["time_budget"] = value
-        assert message in poll_message(blender, "render_selective"), value
+        shown = poll_message(blender, "render_selective")
+        assert message in shown and "--" not in shown, value
     assert "XSL Render" not in blender.data.images
     assert "Traceback" not in capfd.readouterr().err

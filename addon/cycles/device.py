@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import sys
 
-from ...core.errors import InputError
+from ...core.errors import SettingError
 
 DEVICES = ("CPU", "GPU")
 #: Tried in this order; OptiX before CUDA (both NVIDIA: OptiX is faster where it works).
@@ -69,9 +69,10 @@ def use_device(scene, device: str) -> None:
     """Set ``scene`` (an opened copy: a farm task's) to render on ``device``; InputError for
     GPU on a machine without one."""
     if device not in DEVICES:
-        raise InputError(f"--device must be one of {', '.join(DEVICES)} (got '{device}')")
+        raise SettingError(f"{{device.name}} must be one of {', '.join(DEVICES)} "
+                           "(got '{device.value}')", device=device)
     if device == "GPU" and gpu_backend() is None:
-        raise InputError("--device GPU: Cycles finds no GPU on this machine (CUDA, OptiX, HIP, "
-                         "oneAPI or Metal); the job's host requirements should have kept this "
-                         "task off it")
+        raise SettingError("{device}: Cycles finds no GPU on this machine (CUDA, OptiX, HIP, "
+                           "oneAPI or Metal); the job's host requirements should have kept this "
+                           "task off it", device=device)
     scene.cycles.device = device

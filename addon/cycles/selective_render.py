@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, SettingError
 from ...core.progress import Progress, ProgressCallback, Steps, TileProgress, run_steps
 from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import RenderOptions
@@ -306,7 +306,8 @@ def render_adaptive(scene, options: RenderOptions, seconds: float | None,
     if seconds is not None and not seconds > 0:
         raise InputError(f"the time budget must be positive (got {seconds})")
     if not noise_threshold > 0:
-        raise InputError(f"--noise-threshold must be positive (got {noise_threshold})")
+        raise SettingError("{noise_threshold.name} must be positive (got {noise_threshold.value})",
+                           noise_threshold=noise_threshold)
     return _single_render(scene, options, "adaptive", progress, options.max_spp, time_budget=seconds,
                           adaptive_threshold=noise_threshold,
                           extra={"budget": "samples" if seconds is None else "time",

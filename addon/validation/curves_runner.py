@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, SettingError
 from ...core.files import file_sha256, write_json
 from ...core.frames import frame_path
 from ...core.imageio import read_image, write_exr
@@ -99,21 +99,28 @@ class CurvesSettings:
     def check(self) -> "CurvesSettings":
         """InputError (one line) for impossible values, before any scene is opened."""
         if not 1 <= self.repeats <= MAX_REPEATS:
-            raise InputError(f"--repeats must be between 1 and {MAX_REPEATS} (got {self.repeats})")
+            raise SettingError(f"{{repeats.name}} must be between 1 and {MAX_REPEATS} "
+                               "(got {repeats.value})", repeats=self.repeats)
         if self.seed < 0:
-            raise InputError(f"--seed must not be negative (got {self.seed})")
+            raise SettingError("{seed.name} must not be negative (got {seed.value})", seed=self.seed)
         if self.ceiling is not None and self.ceiling < 1:
-            raise InputError(f"--max-spp must be at least 1 (got {self.ceiling})")
+            raise SettingError("{ceiling.name} must be at least 1 (got {ceiling.value})",
+                               ceiling=self.ceiling)
         if self.reference_spp is not None and self.reference_spp < 1:
-            raise InputError(f"--reference-spp must be at least 1 (got {self.reference_spp})")
+            raise SettingError("{reference_spp.name} must be at least 1 (got {reference_spp.value})",
+                               reference_spp=self.reference_spp)
         if self.frames is not None:
             if not self.frames:
-                raise InputError("--frames names no frame")
+                raise SettingError("{frames.name} names no frame", frames=self.frames)
             if self.frame is not None:
-                raise InputError("--frame and --frames cannot be combined")
+                raise SettingError("{frame.name} and {frames.name} cannot be combined",
+                                   frame=self.frame, frames=self.frames)
             if self.reference is not None:
-                raise InputError("--reference is one frame's reference; with --frames each frame's "
-                                 "comes from the cache (`xsl-render reference --frames`) or is rendered")
+                # The command that fills the cache is named as typed: it is a command, not a setting.
+                raise SettingError("{reference.name} is one frame's reference; with {frames.name} "
+                                   "each frame's comes from the cache (`xsl-render reference "
+                                   "--frames`) or is rendered",
+                                   reference=self.reference, frames=self.frames)
         if self.reference is None:
             check_contestant_seeds(self.seeds, REFERENCE_SEED)
         elif not Path(self.reference).is_file():
@@ -187,8 +194,9 @@ class CurvesJob:
         if self.frames is not None:
             missing = without_frames(self.contestants)
             if missing:
-                raise InputError(f"--frames: {', '.join(missing)} cannot render over frames; "
-                                 "leave their curves out (--curves)")
+                raise SettingError(f"{{frames.name}}: {', '.join(missing)} cannot render over "
+                                   "frames; leave their curves out ({curves.name})",
+                                   frames=self.frames, curves=self.settings.curves)
         return scene
 
     def reference(self, steps: WeightedSteps):

@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, SettingError
 from ..frames import frame_expression
 from ..maps.options import MapOptions
 from ..sampling.guided_plan import MAX_TIME_BUDGET, GuidedOptions
@@ -59,7 +59,8 @@ def guided_timeout(time_budget: float) -> int:
 def check_frames_per_task(count: int) -> int:
     """``count`` if it is a sensible number of frames per task, else InputError."""
     if not 1 <= count <= MAX_FRAMES_PER_TASK:
-        raise InputError(f"--frames-per-task must be between 1 and {MAX_FRAMES_PER_TASK} (got {count})")
+        raise SettingError(f"{{frames_per_task.name}} must be between 1 and {MAX_FRAMES_PER_TASK} "
+                           "(got {frames_per_task.value})", frames_per_task=count)
     return count
 
 
@@ -94,29 +95,33 @@ class FarmJob:
 
     def check(self) -> "FarmJob":
         if self.mode not in MODES:
-            raise InputError(f"--mode must be one of {', '.join(MODES)} for a farm job (got '{self.mode}')")
+            raise SettingError(f"{{mode.name}} must be one of {', '.join(MODES)} for a farm job "
+                               "(got '{mode.value}')", mode=self.mode)
         if self.options.resolution is None:
             raise InputError("a farm job needs its resolution fixed")
         self.options.check()
         width, height = self.options.resolution
         if self.mode == GUIDED:
             if self.guided is None:
-                raise InputError("--mode guided needs --time-budget SECONDS")
+                raise SettingError("{mode} needs {time_budget.name} SECONDS", mode=self.mode,
+                                   time_budget=None)
             self.guided.check()
             replace(self.options, tile_size=self.guided.tile_size).check_frame(width, height)
         elif self.guided is not None:
-            raise InputError(f"--time-budget is for --mode guided (got --mode {self.mode})")
+            raise SettingError("{time_budget.name} is for {mode.name} guided (got {mode})",
+                               time_budget=self.guided.time_budget, mode=self.mode)
         self.options.check_frame(width, height)
         self.map_options.validate()
         check_groups(self.tasks_per_frame)
         check_frames_per_task(self.frames_per_task)
         parse_frames(self.frames)
         if self.device not in DEVICES:
-            raise InputError(f"--device must be one of {', '.join(DEVICES)} (got '{self.device}')")
+            raise SettingError(f"{{device.name}} must be one of {', '.join(DEVICES)} "
+                               "(got '{device.value}')", device=self.device)
         if self.task_timeout is not None and not 1 <= self.task_timeout <= MAX_TIME_BUDGET:
-            raise InputError(f"--task-timeout must be between 1 and {MAX_TIME_BUDGET} seconds "
-                             f"(got {self.task_timeout})")
+            raise SettingError(f"{{task_timeout.name}} must be between 1 and {MAX_TIME_BUDGET} "
+                               "seconds (got {task_timeout.value})", task_timeout=self.task_timeout)
         if not self.executable.strip():
-            raise InputError("--executable must not be empty")
+            raise SettingError("{executable.name} must not be empty", executable=self.executable)
         self.worker.check()
         return self

@@ -19,7 +19,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import SettingError
 from ..files import output_set, write_json, write_text
 from .assets import FILE_NAME as ASSET_REFERENCES
 from .worker_requirements import FILE_NAME as WORKER_REQUIREMENTS
@@ -33,10 +33,10 @@ def check_bundle_folder(folder: str | Path) -> Path:
     """``folder`` if a bundle may be written there; InputError (one line) otherwise."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
-        raise InputError(f"--bundle {folder} exists and is not a folder")
+        raise SettingError("{bundle} exists and is not a folder", bundle=folder)
     if folder.is_dir() and any(folder.iterdir()) and not (folder / MARKER).is_file():
-        raise InputError(f"--bundle {folder} is not empty and is not an xsl-render job bundle "
-                         f"(no {MARKER}); refusing to overwrite it")
+        raise SettingError(f"{{bundle}} is not empty and is not an xsl-render job bundle "
+                           f"(no {MARKER}); refusing to overwrite it", bundle=folder)
     return folder
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass
 
-from ..errors import InputError
+from ..errors import SettingError
 from ..sampling.tile_plan import Rect
 
 #: More tile tasks per frame than this is a submission mistake, not a plan (a 4K frame at
@@ -35,7 +35,8 @@ def rect_cost(rect: Rect, render_cost: int) -> int:
 def check_groups(groups: int) -> int:
     """``groups`` if it is a sensible number of tile tasks per frame, else InputError."""
     if not 1 <= groups <= MAX_GROUPS:
-        raise InputError(f"--tasks-per-frame must be between 1 and {MAX_GROUPS} (got {groups})")
+        raise SettingError(f"{{tasks_per_frame.name}} must be between 1 and {MAX_GROUPS} "
+                           "(got {tasks_per_frame.value})", tasks_per_frame=groups)
     return groups
 
 
@@ -85,5 +86,6 @@ def plan_group(rects: list[Rect], group: int, groups: int, render_cost: int) -> 
     """The rectangles tile task ``group`` (1..groups, as the job template counts) renders."""
     check_groups(groups)
     if not 1 <= group <= groups:
-        raise InputError(f"--group must be between 1 and --groups {groups} (got {group})")
+        raise SettingError("{group.name} must be between 1 and {groups} (got {group.value})",
+                           group=group, groups=groups)
     return [rects[index] for index in group_plan(rects, groups, render_cost).groups[group - 1]]

@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import SettingError
 from .worker_requirements import FILE_NAME as REQUIREMENTS_FILE
 from .worker_setup import SETUPS
 
@@ -46,11 +46,12 @@ class WorkerSetup:
 
     def check(self) -> "WorkerSetup":
         if self.setup not in SETUPS:
-            raise InputError(f"--worker-setup must be one of {', '.join(SETUPS)} (got '{self.setup}')")
-        for flag, value in (("--worker-package", self.package), ("--worker-python", self.python),
-                            ("--worker-cache", self.cache)):
+            raise SettingError(f"{{setup.name}} must be one of {', '.join(SETUPS)} "
+                               "(got '{setup.value}')", setup=self.setup)
+        for name in ("package", "python", "cache"):
+            value = getattr(self, name)
             if not value.strip():
-                raise InputError(f"{flag} must not be empty")
+                raise SettingError(f"{{{name}.name}} must not be empty", **{name: value})
         return self
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import SettingError
 
 OPERATORS = ("add", "multiply")
 
@@ -28,18 +28,22 @@ def to_unit_range(values: np.ndarray) -> np.ndarray:
 
 
 def check_combination(w_a: float, w_b: float, op: str, names: tuple[str, str, str]) -> None:
-    """Weights >= 0 (not both 0) and a known operator; ``names`` are the option names."""
-    for weight, name in zip((w_a, w_b), names):
+    """Weights >= 0 (not both 0) and a known operator; ``names`` are the settings' fields
+    (``MapOptions``: "wx", "ws", "xs_op"), which the errors name."""
+    a, b, operation = names
+    for weight, name in zip((w_a, w_b), (a, b)):
         if not np.isfinite(weight) or weight < 0:
-            raise InputError(f"--{name} must be a number >= 0, got {weight}")
+            raise SettingError(f"{{{name}.name}} must be a number >= 0, got {{{name}.value}}",
+                               **{name: weight})
     if w_a == 0 and w_b == 0:
-        raise InputError(f"--{names[0]} and --{names[1]} cannot both be 0")
+        raise SettingError(f"{{{a}.name}} and {{{b}.name}} cannot both be 0", **{a: w_a, b: w_b})
     if op not in OPERATORS:
-        raise InputError(f"--{names[2]} must be 'add' or 'multiply', got '{op}'")
+        raise SettingError(f"{{{operation}.name}} must be 'add' or 'multiply', "
+                           f"got '{{{operation}.value}}'", **{operation: op})
 
 
 def combine(a: np.ndarray, b: np.ndarray, w_a: float, w_b: float, op: str = "add",
-            names: tuple[str, str, str] = ("w-a", "w-b", "op")) -> np.ndarray:
+            names: tuple[str, str, str] = ("w_a", "w_b", "op")) -> np.ndarray:
     """w_a A (op) w_b B in [0, 1], float32.
 
     ``add``: w_a A + w_b B, divided by w_a + w_b when the weights sum to more than one.
@@ -62,10 +66,10 @@ def combine(a: np.ndarray, b: np.ndarray, w_a: float, w_b: float, op: str = "add
 def xs_map(x_map: np.ndarray, s_map: np.ndarray, w_x: float = 0.5, w_s: float = 0.5,
            op: str = "add") -> np.ndarray:
     """XS(w_x, w_s, op) of section 4.3; the paper's XS map is XS(0.5, 0.5, +)."""
-    return combine(x_map, s_map, w_x, w_s, op, names=("wx", "ws", "xs-op"))
+    return combine(x_map, s_map, w_x, w_s, op, names=("wx", "ws", "xs_op"))
 
 
 def xsl_map(xs: np.ndarray, l_map: np.ndarray, w_xs: float = 0.5, w_l: float = 0.5,
             op: str = "add") -> np.ndarray:
     """XSL(w_xs, w_l, op) of section 4.5; the paper's XSL map is XSL(0.5, 0.5, +)."""
-    return combine(xs, l_map, w_xs, w_l, op, names=("wxs", "wl", "xsl-op"))
+    return combine(xs, l_map, w_xs, w_l, op, names=("wxs", "wl", "xsl_op"))

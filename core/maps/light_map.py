@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from ..errors import InputError
+from ..errors import SettingError
 from .options import MAX_N, MAX_SIGMA_BASE
 from .scale_space import gaussian_mixture_blur
 
@@ -35,9 +35,12 @@ REFERENCE_SIZE = 512
 
 def check_parameters(n: int, sigma_base: float) -> None:
     if not isinstance(n, (int, np.integer)) or not 0 <= n <= MAX_N:
-        raise InputError(f"--light-n must be a whole number from 0 to {MAX_N}, got {n}")
+        raise SettingError(f"{{light_n.name}} must be a whole number from 0 to {MAX_N}, "
+                           "got {light_n.value}", light_n=n)
     if not np.isfinite(sigma_base) or not 0 < sigma_base <= MAX_SIGMA_BASE:
-        raise InputError(f"--light-sigma-base must be > 0 and at most {MAX_SIGMA_BASE:g}, got {sigma_base}")
+        raise SettingError(f"{{light_sigma_base.name}} must be > 0 and at most "
+                           f"{MAX_SIGMA_BASE:g}, got {{light_sigma_base.value}}",
+                           light_sigma_base=sigma_base)
 
 
 def resolution_scale(shape: tuple[int, int]) -> float:

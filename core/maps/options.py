@@ -5,7 +5,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import SettingError
 from .director import check_combination
 
 #: Bounds of the light map's n and sigma_base (``light_map``): the paper uses up to 20 and 10;
@@ -35,14 +35,16 @@ class MapOptions:
     minbound: bool = True
 
     def validate(self) -> "MapOptions":
-        check_combination(self.wx, self.ws, self.xs_op, ("wx", "ws", "xs-op"))
-        check_combination(self.wxs, self.wl, self.xsl_op, ("wxs", "wl", "xsl-op"))
+        check_combination(self.wx, self.ws, self.xs_op, ("wx", "ws", "xs_op"))
+        check_combination(self.wxs, self.wl, self.xsl_op, ("wxs", "wl", "xsl_op"))
         n, sigma = self.light_n, self.light_sigma_base
         if n is not None and (int(n) != n or not 0 <= n <= MAX_N):
-            raise InputError(f"--light-n must be a whole number from 0 to {MAX_N} or 'auto', got {n}")
+            raise SettingError(f"{{light_n.name}} must be a whole number from 0 to {MAX_N} or "
+                               "'auto', got {light_n.value}", light_n=n)
         if sigma is not None and not (np.isfinite(sigma) and 0 < sigma <= MAX_SIGMA_BASE):
-            raise InputError(f"--light-sigma-base must be > 0 and at most {MAX_SIGMA_BASE:g} or "
-                             f"'auto', got {sigma}")
+            raise SettingError(f"{{light_sigma_base.name}} must be > 0 and at most "
+                               f"{MAX_SIGMA_BASE:g} or 'auto', got {{light_sigma_base.value}}",
+                               light_sigma_base=sigma)
         return self
 
     def to_dict(self) -> dict:

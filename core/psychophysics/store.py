@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, SettingError, verbatim
 from .plan import (AGE_RANGES, NO_REFERENCE, POSITIONS, Trial, choose_condition,
                    durations_from_events, gold_first_scenes, is_correct, plan_trials)
 from .stimuli import StimulusPair
@@ -120,8 +120,9 @@ class ExperimentStore:
                                (pair.scene, pair.width, pair.height, pair.gold_sha256,
                                 pair.test_sha256))
                 elif tuple(row) != (pair.gold_sha256, pair.test_sha256, pair.width, pair.height):
-                    raise InputError(f"the images of scene '{pair.scene}' changed since {self.path} "
-                                     "recorded them; start a new answers database (--db)")
+                    raise SettingError(f"the images of scene '{verbatim(pair.scene)}' changed "
+                                       "since {db.value} recorded them; start a new answers "
+                                       "database ({db.name})", db=self.path)
 
     def register(self, participant_id: str, age_range: str, vision_corrected: bool,
                  display: dict, scenes: list[str], allowed_conditions: tuple[str, ...],

@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import SettingError
 from .composite import Window
 from .render_options import MIN_TILE_SIZE
 from .tile_plan import Rect, merge_rects, tile_windows
@@ -92,21 +92,29 @@ class GuidedOptions:
     def check(self) -> "GuidedOptions":
         """Raise InputError naming the first impossible option; return self."""
         if not (math.isfinite(self.time_budget) and self.time_budget > 0.0):
-            raise InputError(f"--time-budget must be a positive number of seconds (got {self.time_budget})")
+            raise SettingError("{time_budget.name} must be a positive number of seconds "
+                               "(got {time_budget.value})", time_budget=self.time_budget)
         if self.time_budget > MAX_TIME_BUDGET:
-            raise InputError(f"--time-budget {self.time_budget:g} s is more than a week")
+            raise SettingError("{time_budget} is more than a week",
+                               time_budget=f"{self.time_budget:g} s")
         if self.max_spp is not None and not 1 <= self.max_spp <= UNBOUNDED_SPP:
-            raise InputError(f"--max-spp must be between 1 and {UNBOUNDED_SPP} (got {self.max_spp})")
+            raise SettingError(f"{{max_spp.name}} must be between 1 and {UNBOUNDED_SPP} "
+                               "(got {max_spp.value})", max_spp=self.max_spp)
         if not (math.isfinite(self.pilot_fraction) and 0.0 < self.pilot_fraction <= 1.0):
-            raise InputError(f"--pilot-fraction must be in (0, 1] (got {self.pilot_fraction})")
+            raise SettingError("{pilot_fraction.name} must be in (0, 1] (got {pilot_fraction.value})",
+                               pilot_fraction=self.pilot_fraction)
         if not (math.isfinite(self.exponent) and 0.0 <= self.exponent <= 2.0):
-            raise InputError(f"--guided-exponent must be in [0, 2] (got {self.exponent})")
+            raise SettingError("{exponent.name} must be in [0, 2] (got {exponent.value})",
+                               exponent=self.exponent)
         if self.importance not in IMPORTANCE_MAPS:
-            raise InputError(f"--importance must be one of {', '.join(IMPORTANCE_MAPS)} (got '{self.importance}')")
+            raise SettingError(f"{{importance.name}} must be one of {', '.join(IMPORTANCE_MAPS)} "
+                               "(got '{importance.value}')", importance=self.importance)
         if self.tile_size < MIN_TILE_SIZE:
-            raise InputError(f"--tile-size must be at least {MIN_TILE_SIZE} pixels (got {self.tile_size})")
+            raise SettingError(f"{{tile_size.name}} must be at least {MIN_TILE_SIZE} pixels "
+                               "(got {tile_size.value})", tile_size=self.tile_size)
         if not (math.isfinite(self.level_ratio) and 1.0 < self.level_ratio <= 4.0):
-            raise InputError(f"--level-ratio must be in (1, 4] (got {self.level_ratio})")
+            raise SettingError("{level_ratio.name} must be in (1, 4] (got {level_ratio.value})",
+                               level_ratio=self.level_ratio)
         return self
 
     @property

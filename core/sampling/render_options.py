@@ -10,7 +10,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from ..checks import MAX_SAMPLES, MAX_SEED, frame_size, parse_frame_size, whole_number
-from ..errors import InputError
+from ..errors import Field, SettingError
 from .volume_estimator import EstimatorChoice, check_estimator, fixed_choice
 
 #: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
@@ -89,25 +89,32 @@ class RenderOptions:
     def check(self) -> "RenderOptions":
         """Raise InputError naming the first impossible option; return self."""
         cycles = " (Cycles' limit)"
-        whole_number(self.max_spp, 1, MAX_SAMPLES, "--max-spp", cycles)
-        whole_number(self.min_spp, 1, MAX_SAMPLES, "--min-spp", cycles)
+        whole_number(self.max_spp, 1, MAX_SAMPLES, Field("max_spp"), cycles)
+        whole_number(self.min_spp, 1, MAX_SAMPLES, Field("min_spp"), cycles)
         if self.min_spp > self.max_spp:
-            raise InputError(f"--min-spp {self.min_spp} is larger than --max-spp {self.max_spp}")
-        whole_number(self.tile_size, MIN_TILE_SIZE, 65_536, "--tile-size", " pixels")
+            raise SettingError("{min_spp} is larger than {max_spp}",
+                               min_spp=self.min_spp, max_spp=self.max_spp)
+        whole_number(self.tile_size, MIN_TILE_SIZE, 65_536, Field("tile_size"), " pixels")
         if not 0.0 < self.tile_quantile <= 1.0:
-            raise InputError(f"--tile-quantile must be in (0, 1] (got {self.tile_quantile})")
+            raise SettingError("{tile_quantile.name} must be in (0, 1] (got {tile_quantile.value})",
+                               tile_quantile=self.tile_quantile)
         if self.spp_levels == 1 or self.spp_levels < 0:
-            raise InputError(f"--spp-levels must be 0 (off) or at least 2 (got {self.spp_levels})")
-        whole_number(self.seed, 0, MAX_SEED, "--seed", " (Cycles' limit)")
+            raise SettingError("{spp_levels.name} must be 0 (off) or at least 2 "
+                               "(got {spp_levels.value})", spp_levels=self.spp_levels)
+        whole_number(self.seed, 0, MAX_SEED, Field("seed"), " (Cycles' limit)")
         if not 0 <= self.margin <= 64:
-            raise InputError(f"--margin must be between 0 and 64 pixels (got {self.margin})")
+            raise SettingError("{margin.name} must be between 0 and 64 pixels (got {margin.value})",
+                               margin=self.margin)
         if self.render_cost < 0:
-            raise InputError(f"--render-cost must not be negative (got {self.render_cost})")
+            raise SettingError("{render_cost.name} must not be negative (got {render_cost.value})",
+                               render_cost=self.render_cost)
         if self.adaptive_threshold is not None and not self.adaptive_threshold > 0.0:
-            raise InputError(f"--adaptive-threshold must be positive (got {self.adaptive_threshold})")
+            raise SettingError("{adaptive_threshold.name} must be positive "
+                               "(got {adaptive_threshold.value})",
+                               adaptive_threshold=self.adaptive_threshold)
         if self.resolution is not None:
-            frame_size(*self.resolution)
-        check_estimator(self.estimator, self.step_rate, "--estimator", "--step-rate")
+            frame_size(*self.resolution, Field("resolution"))
+        check_estimator(self.estimator, self.step_rate)
         return self
 
     def volume_estimator(self) -> EstimatorChoice:
@@ -115,7 +122,8 @@ class RenderOptions:
         if self.estimator_choice is not None:
             return self.estimator_choice
         if self.estimator == "auto":
-            raise ValueError("--estimator auto must be chosen for the scene before rendering "
+            # Our bug, not the user's: the front end skipped the choice.
+            raise ValueError("estimator 'auto' must be chosen for the scene before rendering "
                              "(addon.maps.estimator_choice)")
         return fixed_choice(self.estimator, self.step_rate)
 
@@ -130,7 +138,8 @@ class RenderOptions:
     def check_frame(self, width: int, height: int) -> None:
         """Raise InputError when the tiles do not fit the frame they are cut from."""
         if self.tile_size > max(width, height):
-            raise InputError(f"--tile-size {self.tile_size} is larger than the {width}x{height} frame")
+            raise SettingError(f"{{tile_size}} is larger than the {width}x{height} frame",
+                               tile_size=self.tile_size)
 
     def to_dict(self) -> dict:
         data = asdict(self)

@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import SettingError
 
 ESTIMATORS = ("scene", "unbiased", "biased", "auto")
 #: Scene step rates ``auto`` tries, largest first. Rates above 4 were never measured
@@ -50,20 +50,23 @@ _FLOOR = 0.05
 MIN_STEP_RATE, MAX_STEP_RATE = 0.01, 100.0
 
 
-def check_estimator(name: str, step_rate: float | None, field: str = "estimator",
-                    rate_field: str = "step rate") -> None:
-    """Raise InputError naming the setting when ``name`` or ``step_rate`` cannot be used."""
+def check_estimator(name: str, step_rate: float | None) -> None:
+    """Raise an InputError naming the setting (``estimator``, ``step_rate``) when ``name``
+    or ``step_rate`` cannot be used."""
     if name not in ESTIMATORS:
-        raise InputError(f"{field} must be one of {', '.join(ESTIMATORS)}, not '{name}'")
+        raise SettingError(f"{{estimator.name}} must be one of {', '.join(ESTIMATORS)}, "
+                           "not '{estimator.value}'", estimator=name)
     if step_rate is None:
         return
     if not (isinstance(step_rate, (int, float)) and math.isfinite(step_rate)
             and MIN_STEP_RATE <= step_rate <= MAX_STEP_RATE):
-        raise InputError(f"{rate_field} must be a number from {MIN_STEP_RATE:g} to "
-                         f"{MAX_STEP_RATE:g} (Cycles' range), not {step_rate}")
+        raise SettingError(f"{{step_rate.name}} must be a number from {MIN_STEP_RATE:g} to "
+                           f"{MAX_STEP_RATE:g} (Cycles' range), not {{step_rate.value}}",
+                           step_rate=step_rate)
     if name not in ("biased", "auto"):
-        raise InputError(f"a {rate_field} is for the biased estimator (ray marching); "
-                         f"{field} '{name}' does not march")
+        raise SettingError("a {step_rate.name} is for the biased estimator (ray marching); "
+                           "{estimator.name} '{estimator.value}' does not march",
+                           estimator=name, step_rate=step_rate)
 
 
 def tolerated_bias(spp: float) -> float:

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..checks import name_list
-from ..errors import InputError
+from ..errors import Field, InputError, SettingError
 
 #: Uniform budgets as fractions of the ceiling; the point at 1x is the gold standard.
 UNIFORM_FRACTIONS = (1 / 16, 1 / 8, 1 / 4, 1 / 2, 1)
@@ -168,7 +168,7 @@ def parse_curves(text: str | None) -> tuple[str, ...]:
     names = curve_names()
     if text is None:
         return tuple(names)
-    wanted = name_list(text, "--curves", names, "curve")
+    wanted = name_list(text, Field("curves"), names, "curve")
     return tuple(name for name in names if name in {"uniform", *wanted})
 
 
@@ -176,7 +176,7 @@ def plan_contestants(ceiling: int, curves: tuple[str, ...] | None = None) -> lis
     """Every contestant of the chosen curves for ``ceiling``, in an order where a
     contestant's ``time_of`` source comes before it."""
     if ceiling < 1:
-        raise InputError(f"--max-spp must be at least 1 (got {ceiling})")
+        raise SettingError("{ceiling.name} must be at least 1 (got {ceiling.value})", ceiling=ceiling)
     chosen = set(curve_names() if curves is None else curves)
     plan = [c for spec in CURVES if spec.name in chosen for c in spec.points(ceiling)]
     names = {c.name for c in plan}

@@ -14,7 +14,7 @@ import re
 from pathlib import Path
 
 from ..checks import name_list
-from ..errors import InputError
+from ..errors import Field, InputError
 
 EXAMPLE_SCENES = ("balls_a", "balls_b", "statue", "road")
 ANIMATED_EXAMPLES = ("street",)
@@ -46,7 +46,7 @@ def resolve_scenes(text: str | None) -> list[tuple[str, Path]]:
     A name is reported as is; a path under its file stem. Names must be unique, because each
     scene gets a folder of that name.
     """
-    items = list(EXAMPLE_SCENES) if text is None else name_list(text, "--scenes")
+    items = list(EXAMPLE_SCENES) if text is None else name_list(text, Field("scenes"))
     scenes: list[tuple[str, Path]] = []
     for item in items:
         if item.lower().endswith(".blend") or os.sep in item or "/" in item:

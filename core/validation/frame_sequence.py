@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..checks import readable_file, readable_folder
-from ..errors import InputError
+from ..errors import InputError, SettingError, verbatim
 from ..frames import frame_path, has_frame_marker
 from ..imageio import image_header
 
@@ -119,8 +119,10 @@ def find_frames(text: str, label: str, frames: tuple[int, ...] | None = None) ->
         found = {frame: found[frame] for frame in frames if frame in found}
     if not found:
         if frames is not None:
-            raise InputError(f"{label} {text} holds none of the frames of --frames "
-                             f"(frame {frames[0]} would be {Sequence(label, text, {}).where(frames[0])})")
+            where = Sequence(label, text, {}).where(frames[0])
+            raise SettingError(f"{verbatim(label)} {verbatim(text)} holds none of the frames of "
+                               f"{{frames.name}} (frame {frames[0]} would be {verbatim(where)})",
+                               frames=frames)
         what = "names no existing frame" if has_frame_marker(text) else "holds no .exr frames"
         raise InputError(f"{label} {text} {what}")
     return Sequence(label, text, dict(sorted(found.items())))
@@ -189,11 +191,13 @@ def match_frames(reference: Sequence, test: Sequence,
         for side, other in ((reference, test), (test, reference)):
             if frame not in side.frames:
                 if frames is not None:
-                    raise InputError(f"{side.label} has no frame {frame} of --frames: "
-                                     f"{side.where(frame)} does not exist")
-                raise InputError(f"frame {frame} is in {other.label} but not in {side.label} "
-                                 f"({side.where(frame)} does not exist); --frames chooses the "
-                                 "frames to compare")
+                    raise SettingError(f"{verbatim(side.label)} has no frame {frame} of "
+                                       f"{{frames.name}}: {verbatim(side.where(frame))} does not "
+                                       "exist", frames=frames)
+                raise SettingError(f"frame {frame} is in {verbatim(other.label)} but not in "
+                                   f"{verbatim(side.label)} ({verbatim(side.where(frame))} does "
+                                   "not exist); {frames.name} chooses the frames to compare",
+                                   frames=frames)
         pairs.append(FramePair(frame, reference.frames[frame], test.frames[frame]))
     return pairs
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..checks import name_list
-from ..errors import InputError
+from ..errors import Field, SettingError
 from ..maps.options import MapOptions
 
 GOLD = "gold"
@@ -92,7 +92,7 @@ def parse_variants(text: str | None) -> tuple[str, ...]:
     metric compares with it), and equal-time runs bring the XSL run they take their time from."""
     if text is None:
         return DEFAULT_VARIANTS
-    names = name_list(text, "--variants", VARIANTS, "variant")
+    names = name_list(text, Field("variants"), VARIANTS, "variant")
     wanted = {GOLD, *names}
     if any(VARIANTS[name].equal_time for name in names):
         wanted.add(EQUAL_TIME_SOURCE)
@@ -174,9 +174,11 @@ class ValidationSettings:
         from .reference import REFERENCE_SEED, check_contestant_seeds
 
         if self.longest_side is not None and not 8 <= self.longest_side <= 16384:
-            raise InputError(f"--size must be between 8 and 16384 pixels (got {self.longest_side})")
+            raise SettingError("{longest_side.name} must be between 8 and 16384 pixels "
+                               "(got {longest_side.value})", longest_side=self.longest_side)
         if self.reference_spp is not None and self.reference_spp < 1:
-            raise InputError(f"--reference-spp must be at least 1 (got {self.reference_spp})")
+            raise SettingError("{reference_spp.name} must be at least 1 (got {reference_spp.value})",
+                               reference_spp=self.reference_spp)
         check_contestant_seeds((self.seed,), REFERENCE_SEED)
         return RenderOptions(max_spp=max_spp or self.max_spp, min_spp=self.min_spp,
                              tile_size=self.tile_size, seed=self.seed,

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import SettingError
 from ..files import atomic_path, output_set
 from ..imageio import image_attributes, read_image, write_exr
 from .example_scenes import example_folders
@@ -53,16 +53,16 @@ def default_reference_spp(ceiling: int) -> int:
     """Samples per pixel of the reference for contestants with ``ceiling`` at most:
     ``max(1024, 16 x ceiling)``."""
     if ceiling < 1:
-        raise InputError(f"--max-spp must be at least 1 (got {ceiling})")
+        raise SettingError("{ceiling.name} must be at least 1 (got {ceiling.value})", ceiling=ceiling)
     return max(MIN_REFERENCE_SPP, SPP_PER_CEILING * int(ceiling))
 
 
 def check_reference_options(spp: int | None, seed: int) -> None:
     """InputError (one line) for a reference sample count below 1 or a negative seed."""
     if spp is not None and spp < 1:
-        raise InputError(f"--spp must be at least 1 (got {spp})")
+        raise SettingError("{spp.name} must be at least 1 (got {spp.value})", spp=spp)
     if seed < 0:
-        raise InputError(f"--seed must not be negative (got {seed})")
+        raise SettingError("{seed.name} must not be negative (got {seed.value})", seed=seed)
 
 
 def check_contestant_seeds(seeds, reference_seed: int | None) -> None:
@@ -72,8 +72,9 @@ def check_contestant_seeds(seeds, reference_seed: int | None) -> None:
         return
     for seed in seeds:
         if int(seed) == int(reference_seed):
-            raise InputError(f"contestant seed {seed} is the converged reference's seed; "
-                             "give contestants other seeds (or the reference another --seed)")
+            raise SettingError(f"contestant seed {seed} is the converged reference's seed; give "
+                               "contestants other seeds (or the reference another {seed.name})",
+                               seed=reference_seed)
 
 
 @dataclass(frozen=True)
@@ -189,11 +190,12 @@ def read_reference(path: str | os.PathLike, size: tuple[int, int] | None = None)
     height), when it has another size."""
     path = Path(path)
     if path.suffix.lower() != ".exr":
-        raise InputError(f"--reference must be an .exr file (got {path})")
+        raise SettingError("{reference.name} must be an .exr file (got {reference.value})",
+                           reference=path)
     image = read_image(path)
     if size is not None and (image.shape[1], image.shape[0]) != tuple(size):
-        raise InputError(f"--reference {path} is {image.shape[1]}x{image.shape[0]}, the runs render "
-                         f"at {size[0]}x{size[1]}")
+        raise SettingError(f"{{reference}} is {image.shape[1]}x{image.shape[0]}, the runs render "
+                           f"at {size[0]}x{size[1]}", reference=path)
     attributes = image_attributes(path)
 
     def number(name):
