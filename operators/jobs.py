@@ -80,27 +80,24 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     chosen in the panel; or, with the Time Budget sampler, the guided render within the
     budget (its importance map computed first, inside the budget; every frame of an
     animation gets its own budget)."""
-    from ..addon.frame_jobs import estimated_frame, guided_frame, selective_frame
+    from ..addon.render_dispatch import request_frame_job
     from ..core.sampling.guided_plan import SequenceBudget
-    from ..addon.maps.estimator_choice import estimator_spp
+    from ..core.sampling.render_request import RenderRequest
 
     settings = scene.xsl_render
     options = render_options(settings)
+    sequence = None
     if uses_budget(settings):
-        guided = guided_options(settings)
-        label, mode = "Guided render", "guided"
+        request = RenderRequest("guided", options, guided=guided_options(settings),
+                                map_options=map_options(settings))
+        label = "Guided render"
         # An animation's frames share its time (the first frame's scene sync paid back by the rest).
-        sequence = SequenceBudget(guided.time_budget, len(animation_frames(scene))) if animation else None
-        frame_job = estimated_frame(
-            lambda chosen: guided_frame(guided, map_options(settings), chosen, ray_cache_dir(scene),
-                                        sequence),
-            options, estimator_spp(mode, options, {"guided": guided}))
+        if animation:
+            sequence = SequenceBudget(request.guided.time_budget, len(animation_frames(scene)))
     else:
-        mode = settings.director.lower()
-        frame_job = estimated_frame(
-            lambda chosen: selective_frame(map_options(settings), chosen, mode, ray_cache_dir(scene)),
-            options, estimator_spp(mode, options))
-        label = f"{mode.upper()} render"
+        request = RenderRequest(settings.director.lower(), options, map_options=map_options(settings))
+        label = f"{request.mode.upper()} render"
+    frame_job = request_frame_job(request, ray_cache_dir(scene), sequence)
     if animation:
         return _animation_job(scene, label, frame_job, options, filepath, gold=False)
     return Job(label, frame_job(scene), _still_finish(scene, options, filepath, gold=False))
@@ -109,19 +106,19 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
 def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = False) -> Job:
     """Max samples everywhere: one Cycles render, or (``banded``, the panel) full-width bands
     bit-identical to it that a modal operator can stop between."""
-    from ..addon.frame_jobs import estimated_frame, single_render_frame, stepped_render_frame
     from ..addon.cycles.banded_gold import gold_band_steps
-    from ..addon.cycles.selective_render import render_gold
+    from ..addon.frame_jobs import estimated_frame, stepped_render_frame
+    from ..addon.render_dispatch import request_frame_job
+    from ..core.sampling.render_request import RenderRequest
 
     options = render_options(scene.xsl_render)
     if banded:
+        # Not another mode: the gold render cut so that a modal operator can stop between bands.
         frame_job = estimated_frame(
             lambda chosen: stepped_render_frame(lambda s: gold_band_steps(s, chosen)),
             options, options.max_spp)
     else:
-        frame_job = estimated_frame(
-            lambda chosen: single_render_frame(lambda s: render_gold(s, chosen), "gold"),
-            options, options.max_spp)
+        frame_job = request_frame_job(RenderRequest("gold", options))
     if animation:
         return _animation_job(scene, "Gold render", frame_job, options, filepath, gold=True)
     return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))

@@ -12,7 +12,7 @@ the frames (or rectangles) it had not finished.
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
 ``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
 task with nothing left to do returns at once. The pixels come from
-``selective_render.render_rect`` and ``frame_jobs.guided_frame``, the same code
+``selective_render.render_rect`` and the dispatcher (``render_dispatch``), the same code
 ``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
 
@@ -256,7 +256,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
                     guided: GuidedOptions, map_options: MapOptions, options: RenderOptions,
                     device: str | None = None, progress: ProgressCallback | None = None) -> list[TaskOutcome]:
     """Render each of ``frames`` whose files are not finished for the same inputs with the
-    guided sampler, one after another in one Cycles session (``animation.frames_steps``),
+    guided sampler, one after another in one Cycles session (``frame_jobs.frames_steps``),
     as ``xsl-render render --mode guided --frames`` does: the frames rendered share
     ``guided.time_budget`` each (``SequenceBudget``: the first one's scene sync is paid back
     by the others), a frame's importance map inside its share, camera rays kept for the next
@@ -283,8 +283,9 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     if todo:
         from ...core.progress import run_steps, scaled_steps
         from ...core.sampling.guided_plan import SequenceBudget
-        from ..frame_jobs import estimated_frame, frames_steps, guided_frame
-        from ..maps.estimator_choice import estimator_spp
+        from ...core.sampling.render_request import RenderRequest
+        from ..frame_jobs import frames_steps
+        from ..render_dispatch import request_frame_job
 
         def on_frame(result) -> None:
             files = FrameFiles(Path(output), result.frame)
@@ -303,8 +304,8 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
         sequence = SequenceBudget(guided.time_budget, len(todo))
         rays = Path(tempfile.mkdtemp(prefix="xsl-rays-"))
         try:
-            job = estimated_frame(lambda chosen: guided_frame(guided, map_options, chosen, rays, sequence),
-                                  options, estimator_spp("guided", options, {"guided": guided}))
+            request = RenderRequest("guided", options, guided=guided, map_options=map_options)
+            job = request_frame_job(request, rays, sequence)
             run_steps(scaled_steps(frames_steps(scene, todo, job, on_frame),
                                    1.0 - len(todo) / len(frames), 1.0), progress)
         finally:

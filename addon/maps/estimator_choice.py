@@ -71,26 +71,6 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
     return replace(choice, seconds=time.perf_counter() - started)
 
 
-#: The samples per pixel ``auto`` assumes for a guided render without a ceiling: its sample
-#: count is only known after the pilot, which already renders with the estimator (changing
-#: it afterwards would sync the scene again). 16 is what the measured budgets gave.
-GUIDED_SPP = 16
-
-
-def estimator_spp(mode: str, options: RenderOptions, budget: dict | None = None) -> float:
-    """The samples per pixel a run of ``mode`` gives its pixels at most, which sets how much
-    bias ``auto`` tolerates: uniform's count when it has one, guided's ceiling (or
-    ``GUIDED_SPP``), the ceiling otherwise (xs and xsl give some pixels that many)."""
-    budget = budget or {}
-    if mode == "uniform" and budget.get("spp"):
-        return float(budget["spp"])
-    if mode == "guided":
-        guided = budget.get("guided")
-        ceiling = getattr(guided, "max_spp", None)
-        return float(ceiling) if ceiling else float(GUIDED_SPP)
-    return float(options.max_spp)
-
-
 def with_estimator_choice(scene, options: RenderOptions, spp: float,
                           previous: EstimatorChoice | None = None) -> RenderOptions:
     """``options`` with auto's choice for the scene at its current frame (unchanged for the

@@ -17,23 +17,21 @@ Every contestant pays the same fixed costs, and all of its own:
 The time of a run (``run_contestant``) is the wall time of everything it does: maps, scene
 sync, renders, compositing, denoising; writing its files afterwards is not counted.
 
-Adding a kind: a function ``(scene, contestant, options, budget_s, progress) ->
-RenderOutcome`` in ``RENDERERS`` (``budget_s`` is the time budget of a contestant with
-``time_of``, else None), as ``_guided`` is.
+A contestant renders as ``xsl-render render`` does, not as a copy of it: ``contestant_request``
+turns it into a ``RenderRequest`` and the dispatcher (``addon.render_dispatch``) renders
+that, for a still and over frames alike. Adding a kind: a request maker in ``REQUESTS``
+(``(contestant, options, budget_s) -> RenderRequest``, ``budget_s`` the time budget of a
+contestant with ``time_of``, else None; over frames, a frame's share of it), and a scene
+setup in ``SETUPS`` when the kind is a mode with a Cycles switch turned on (path guiding).
 
 Over frames (``curves --frames``)
 ---------------------------------
 ``run_contestant_frames`` renders a contestant over a list of frames as ``xsl-render render
---frames`` does: the same frame jobs (``addon.frame_jobs``) through ``frames_steps``, one
-Cycles session for the whole range (persistent data on, so the run pays one scene sync, not
-one per frame), xs and xsl with their camera rays cast once and reused while camera and
-geometry stay still, guided sharing the run's budget among its frames (``SequenceBudget``),
-the volume estimator ``auto`` chosen per frame. A kind renders over frames when it has a
-maker in ``FRAME_JOBS``: ``(contestant, options, budget_s, frame_count, cache_dir, shared)
--> (FrameJob, setup)``, ``setup(scene)`` run once before the frames (path guiding switches
-guiding on there); a maker may be called once per frame (the estimator ``auto`` makes each
-frame's job with that frame's choice), so what the frames share lives in ``shared``, a dict
-of the run (guided keeps its ``SequenceBudget`` there). Writing the frames' files (``on_frame``) is not counted in the time.
+--frames`` does: the same frame job through ``frames_steps``, one Cycles session for the
+whole range (persistent data on, so the run pays one scene sync, not one per frame), xs and
+xsl with their camera rays cast once and reused while camera and geometry stay still,
+guided sharing the run's budget among its frames (``SequenceBudget``), the volume estimator
+``auto`` chosen per frame. Writing the frames' files (``on_frame``) is not counted in the time.
 """
 from __future__ import annotations
 
@@ -46,17 +44,17 @@ from typing import Callable, Sequence
 
 from ...core.errors import InputError
 from ...core.maps.options import MapOptions
-from ...core.progress import ProgressCallback
+from ...core.progress import ProgressCallback, run_steps
+from ...core.sampling.guided_plan import GuidedOptions, SequenceBudget
 from ...core.sampling.render_options import RenderOptions
-from ...core.progress import run_steps
+from ...core.sampling.render_request import RenderRequest
 from ...core.validation.contestants import Contestant
-from ..frame_jobs import (FrameJob, FrameResult, estimated_frame, frames_steps, guided_frame,
-                         selective_frame, single_render_frame)
 from ..cycles import selective_render as sr
+from ..frame_jobs import FrameResult, frames_steps
+from ..render_dispatch import request_frame_job
 from ..scene.state import preserved_scene
 
-Renderer = Callable[[object, Contestant, RenderOptions, "float | None", "ProgressCallback | None"],
-                    sr.RenderOutcome]
+RequestMaker = Callable[[Contestant, RenderOptions, "float | None"], RenderRequest]
 
 
 def warm_up(scene) -> None:
@@ -65,25 +63,51 @@ def warm_up(scene) -> None:
     sr.render_uniform(scene, RenderOptions(max_spp=1, resolution=(8, 8)), spp=1)
 
 
-def _uniform(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
-    return sr.render_uniform(scene, options, spp=int(contestant.params["spp"]), progress=progress)
+def _uniform(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    return RenderRequest("uniform", options, spp=int(contestant.params["spp"]))
 
 
-def _adaptive(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
-    options = replace(options, max_spp=int(contestant.params["max_spp"])).check()
-    return sr.render_adaptive(scene, options, None, float(contestant.params["noise_threshold"]),
-                              progress=progress)
+def _adaptive(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    """Cycles' adaptive sampling up to the contestant's ceiling, at its noise threshold."""
+    return RenderRequest("adaptive", replace(options, max_spp=int(contestant.params["max_spp"])),
+                         noise_threshold=float(contestant.params["noise_threshold"]))
 
 
-def _guiding(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
-    """Uniform sampling with Cycles' path guiding on (surface and volume guiding as the
-    scene has them, Blender's defaults: both on). Whether Cycles really used it shows in
-    the image: the curves job compares it with the uniform run of the same samples and seed."""
-    with preserved_scene(scene):
-        scene.cycles.use_guiding = True
-        outcome = sr.render_uniform(scene, options, spp=int(contestant.params["spp"]), progress=progress)
-        outcome.stats["path_guiding"] = _guiding_settings(scene)
-    return outcome
+def _selective(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    """XS or XSL with the paper's map options, the maps computed in the run (their time
+    counted)."""
+    return RenderRequest(contestant.kind, replace(options, max_spp=int(contestant.params["max_spp"])),
+                         map_options=MapOptions())
+
+
+def _guided(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    """The guided render in ``budget_s`` seconds, its importance map (when it has one)
+    computed inside the budget."""
+    defaults = GuidedOptions(time_budget=1.0)
+    guided = GuidedOptions(time_budget=float(budget_s),
+                           importance=contestant.params.get("importance", defaults.importance),
+                           exponent=float(contestant.params.get("exponent", defaults.exponent)))
+    return RenderRequest("guided", options, guided=guided, map_options=MapOptions())
+
+
+def _switch_guiding_on(scene) -> None:
+    """Cycles' path guiding (surface and volume guiding as the scene has them, Blender's
+    defaults: both on). Whether Cycles really used it shows in the image: the curves job
+    compares it with the uniform run of the same samples and seed."""
+    scene.cycles.use_guiding = True
+
+
+#: Each kind's request; path guiding is uniform sampling with Cycles' guiding on (``SETUPS``).
+REQUESTS: dict[str, RequestMaker] = {
+    "uniform": _uniform,
+    "adaptive": _adaptive,
+    "guiding": _uniform,
+    "xs": _selective,
+    "xsl": _selective,
+    "guided": _guided,
+}
+#: Kinds whose scene is set up before they render (inside the run's ``preserved_scene``).
+SETUPS: dict[str, Callable[[object], None]] = {"guiding": _switch_guiding_on}
 
 
 def _guiding_settings(scene) -> dict:
@@ -98,144 +122,40 @@ def _guiding_settings(scene) -> dict:
             "device": scene.cycles.device}
 
 
-def _selective(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
-    """XS or XSL with the paper's map options, the maps computed here (their time counted),
-    as ``xsl-render render --mode xs/xsl`` does."""
-    from ..maps.director_maps import compute_maps
-
-    started = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        maps = compute_maps(scene, MapOptions(), size=options.resolution)
-    map_seconds = time.perf_counter() - started
-    options = replace(options, max_spp=int(contestant.params["max_spp"])).check()
-    outcome = sr.render_selective(scene, maps.director(contestant.kind), options, progress=progress,
-                                  mode=contestant.kind, map_seconds=map_seconds)
-    outcome.warnings += [str(w.message) for w in caught]
-    return outcome
-
-
-def _guided(scene, contestant: Contestant, options: RenderOptions, budget_s, progress):
-    """The guided render in ``budget_s`` seconds, its importance map (when it has one)
-    computed here inside the budget, as ``xsl-render render --mode guided`` does."""
-    from ...core.sampling.guided_plan import GuidedOptions
-    from ..cycles.guided_render import render_guided
-    from ..maps.director_maps import named_map
-
-    guided = GuidedOptions(time_budget=float(budget_s),
-                           importance=contestant.params.get("importance", "none")).check()
-    importance, map_seconds = None, 0.0
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        if guided.importance != "none":
-            started = time.perf_counter()
-            importance = named_map(scene, guided.importance, MapOptions(), options.resolution)
-            map_seconds = time.perf_counter() - started
-        outcome = render_guided(scene, options, guided, importance, map_seconds, progress)
-    outcome.warnings += [str(w.message) for w in caught]
-    return outcome
-
-
-RENDERERS: dict[str, Renderer] = {
-    "uniform": _uniform,
-    "adaptive": _adaptive,
-    "guiding": _guiding,
-    "xs": _selective,
-    "xsl": _selective,
-    "guided": _guided,
-}
+def contestant_request(contestant: Contestant, options: RenderOptions,
+                       budget_s: float | None = None) -> RenderRequest:
+    """The ``RenderRequest`` a contestant renders (checked): its kind's, with its
+    ``estimator`` and ``step_rate`` parameters when it has them."""
+    maker = REQUESTS.get(contestant.kind)
+    if maker is None:
+        raise InputError(f"no renderer for contestants of kind '{contestant.kind}' "
+                         f"(known: {', '.join(REQUESTS)})")
+    if contestant.time_of is not None and not (budget_s and budget_s > 0):
+        raise InputError(f"{contestant.name} needs a positive time budget (from {contestant.time_of})")
+    if "estimator" in contestant.params:
+        options = replace(options, estimator=contestant.params["estimator"],
+                          step_rate=contestant.params.get("step_rate"))
+    return maker(contestant, options, budget_s).check()
 
 
 def run_contestant(scene, contestant: Contestant, options: RenderOptions, budget_s: float | None = None,
                    progress: ProgressCallback | None = None) -> tuple[sr.RenderOutcome, float]:
     """Render one contestant; returns its outcome and its wall time in seconds (everything
     the run does, see the module notes)."""
-    renderer = RENDERERS.get(contestant.kind)
-    if renderer is None:
-        raise InputError(f"no renderer for contestants of kind '{contestant.kind}' "
-                         f"(known: {', '.join(RENDERERS)})")
-    if contestant.time_of is not None and not (budget_s and budget_s > 0):
-        raise InputError(f"{contestant.name} needs a positive time budget (from {contestant.time_of})")
+    request = contestant_request(contestant, options, budget_s)
+    setup = SETUPS.get(contestant.kind)
     started = time.perf_counter()
-    options = _with_estimator(scene, contestant, options)
-    outcome = renderer(scene, contestant, options, budget_s, progress)
-    return outcome, time.perf_counter() - started
-
-
-def _with_estimator(scene, contestant: Contestant, options: RenderOptions) -> RenderOptions:
-    """A contestant's ``estimator`` (and ``step_rate``) parameters, auto chosen here: inside
-    the run's time, as ``xsl-render render --estimator auto`` chooses it."""
-    from ..maps.estimator_choice import estimator_spp, with_estimator_choice
-
-    if "estimator" not in contestant.params:
-        return options
-    options = replace(options, estimator=contestant.params["estimator"],
-                      step_rate=contestant.params.get("step_rate")).check()
-    budget = {"spp": contestant.params.get("spp")}
-    return with_estimator_choice(scene, options, estimator_spp(contestant.kind, options, budget))
-
-
-# -- over frames -------------------------------------------------------------------------
-FrameJobMaker = Callable[[Contestant, RenderOptions, "float | None", int, str, dict],
-                         "tuple[FrameJob, Callable[[object], None] | None]"]
-
-
-def _uniform_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
-    spp = int(contestant.params["spp"])
-    return single_render_frame(lambda scene: sr.render_uniform(scene, options, spp=spp), "uniform"), None
-
-
-def _adaptive_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
-    threshold = float(contestant.params["noise_threshold"])
-    return single_render_frame(lambda scene: sr.render_adaptive(scene, options, None, threshold), "adaptive"), None
-
-
-def _guiding_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
-    """Uniform frames with path guiding switched on once for the whole run (``_guiding``)."""
-    spp = int(contestant.params["spp"])
-
-    def setup(scene) -> None:
-        scene.cycles.use_guiding = True
-
-    def render(scene) -> sr.RenderOutcome:
-        outcome = sr.render_uniform(scene, options, spp=spp)
-        outcome.stats["path_guiding"] = _guiding_settings(scene)
-        return outcome
-
-    return single_render_frame(render, "path guiding"), setup
-
-
-def _selective_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
-    """XS or XSL as ``render --mode xs/xsl --frames`` renders them: each frame's maps with
-    the paper's options, the camera rays cast once into ``cache_dir``."""
-    return selective_frame(MapOptions(), options, contestant.kind, cache_dir), None
-
-
-def _guided_frames(contestant: Contestant, options: RenderOptions, budget_s, count, cache_dir, shared):
-    """The guided frames of ``render --mode guided --frames``: the run's budget (the time
-    its uniform run took over every frame) shared among the frames (``SequenceBudget``)."""
-    from ...core.sampling.guided_plan import GuidedOptions, SequenceBudget
-
-    per_frame = float(budget_s) / count
-    guided = GuidedOptions(time_budget=per_frame,
-                           importance=contestant.params.get("importance", "none")).check()
-    sequence = shared.setdefault("sequence", SequenceBudget(per_frame, count))
-    return guided_frame(guided, MapOptions(), options, cache_dir, sequence), None
-
-
-FRAME_JOBS: dict[str, FrameJobMaker] = {
-    "uniform": _uniform_frames,
-    "adaptive": _adaptive_frames,
-    "guiding": _guiding_frames,
-    "xs": _selective_frames,
-    "xsl": _selective_frames,
-    "guided": _guided_frames,
-}
-
-
-def without_frames(contestants: Sequence[Contestant]) -> list[str]:
-    """Names of the contestants whose kind cannot render over frames (no ``FRAME_JOBS``)."""
-    return [c.name for c in contestants if c.kind not in FRAME_JOBS]
+    with warnings.catch_warnings(record=True) as caught, preserved_scene(scene):
+        warnings.simplefilter("always")
+        if setup is not None:
+            setup(scene)
+        job = request_frame_job(request, progress=progress)
+        outcome = run_steps(job(scene), progress).outcome
+        if setup is not None:
+            outcome.stats["path_guiding"] = _guiding_settings(scene)
+    seconds = time.perf_counter() - started
+    outcome.warnings += [str(w.message) for w in caught]
+    return outcome, seconds
 
 
 def run_contestant_frames(scene, contestant: Contestant, options: RenderOptions, frames: Sequence[int],
@@ -245,32 +165,21 @@ def run_contestant_frames(scene, contestant: Contestant, options: RenderOptions,
     what ``on_frame(FrameResult)`` returned for each frame (the results themselves without
     it) and the run's wall time in seconds, the time spent in ``on_frame`` (writing files)
     left out. The scene is left as it was found."""
-    from ..maps.estimator_choice import estimator_spp
-
-    maker = FRAME_JOBS.get(contestant.kind)
-    if maker is None:
-        raise InputError(f"{contestant.name}: contestants of kind '{contestant.kind}' do not render "
-                         f"over frames (those that do: {', '.join(FRAME_JOBS)})")
-    if contestant.time_of is not None and not (budget_s and budget_s > 0):
-        raise InputError(f"{contestant.name} needs a positive time budget (from {contestant.time_of})")
     frames = list(frames)
-    if "max_spp" in contestant.params:
-        options = replace(options, max_spp=int(contestant.params["max_spp"])).check()
-    if "estimator" in contestant.params:
-        options = replace(options, estimator=contestant.params["estimator"],
-                          step_rate=contestant.params.get("step_rate")).check()
+    # A time budget is the whole run's; each frame gets its share (guided: what the range
+    # has left, ``SequenceBudget``).
+    per_frame = None if budget_s is None else float(budget_s) / max(1, len(frames))
+    request = contestant_request(contestant, options, per_frame)
+    sequence = None if request.guided is None else SequenceBudget(request.guided.time_budget, len(frames))
+    setup = SETUPS.get(contestant.kind)
     cache_dir = tempfile.mkdtemp(prefix="xsl-curves-rays-")
     outside = [0.0]
-    setups, shared = [], {}
-
-    def make_job(frame_options: RenderOptions) -> FrameJob:
-        job, setup = maker(contestant, frame_options, budget_s, len(frames), cache_dir, shared)
-        setups[:] = [setup] if setup is not None else []
-        return job
 
     def done(result: FrameResult):
         began = time.perf_counter()
         try:
+            if setup is not None:
+                result.outcome.stats["path_guiding"] = _guiding_settings(scene)
             return result if on_frame is None else on_frame(result)
         finally:
             outside[0] += time.perf_counter() - began
@@ -278,12 +187,17 @@ def run_contestant_frames(scene, contestant: Contestant, options: RenderOptions,
     try:
         with preserved_scene(scene):
             started = time.perf_counter()
-            job = estimated_frame(make_job, options, estimator_spp(
-                contestant.kind, options, {"spp": contestant.params.get("spp")}))
-            for setup in setups:
+            if setup is not None:
                 setup(scene)
+            job = request_frame_job(request, cache_dir, sequence)
             results = run_steps(frames_steps(scene, frames, job, done), progress)
             seconds = time.perf_counter() - started - outside[0]
     finally:
         shutil.rmtree(cache_dir, ignore_errors=True)
     return results, seconds
+
+
+def without_frames(contestants: Sequence[Contestant]) -> list[str]:
+    """Names of the contestants whose kind cannot render over frames (every kind can now:
+    kept for the curves runner's check of unknown kinds)."""
+    return [c.name for c in contestants if c.kind not in REQUESTS]

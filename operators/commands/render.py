@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ...core.checks import MAX_SAMPLES, finite_number, separate_files
@@ -24,7 +25,7 @@ from .common import (add_estimator_arguments, add_guided_arguments, add_map_argu
                      add_scene_arguments, add_tile_arguments,
                      guided_options_from_args, map_options_from_args, render_options_from_args,
                      warnings_as_lines)
-from .render_modes import check_scene, mode_frame_job, spp_scale, summary_line
+from .render_modes import check_scene, spp_scale, summary_line
 
 NAME = "render"
 HELP = ("render the scene selectively (xs, xsl), within a time budget where the error is "
@@ -37,8 +38,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mode", required=True, choices=MODES,
                         help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
                              "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
-                             "adaptive sampling at equal time; guided: a pilot pass, then the "
-                             "rest of --time-budget where the denoised frame keeps its error")
+                             "adaptive sampling at equal time; guided: within --time-budget, "
+                             "the samples spread evenly (or by --importance, or by a pilot's "
+                             "error scores with --guided-exponent > 0)")
     parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None,
                         help="samples per pixel where the map is 1 (every mode but guided, where it "
                              "is an optional per-pixel ceiling)")
@@ -109,17 +111,13 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
 
 
 def check(args) -> None:
-    """What relates several options (``cli.py`` runs this before anything else): uniform's
-    --spp stays under the ceiling, guided has its --time-budget (and only guided), every
-    other mode its --max-spp."""
-    if args.mode == "guided":
-        guided_options_from_args(args)
-    elif args.time_budget is not None:
-        raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
-    elif args.max_spp is None:
-        raise InputError(f"--mode {args.mode} needs --max-spp N")
-    if args.spp is not None and args.max_spp is not None and args.spp > args.max_spp:
-        raise InputError(f"--spp {args.spp} is above --max-spp {args.max_spp}, the ceiling of every mode")
+    """The whole request, before anything else (``cli.py``): every option, and what relates
+    them (uniform's --spp under the ceiling, guided's --time-budget and only guided's, every
+    other mode's --max-spp, a budget file that reads), as ``run`` will build it."""
+    frames = _frames(args)
+    _, map_file = _request(args, render_options_from_args(args))
+    if frames is not None and map_file is not None:
+        raise InputError("--frames computes every frame's own maps; --map and --maps hold one frame's")
 
 
 def outputs_as_a_set(args) -> bool:
@@ -157,41 +155,47 @@ def _render_budget(stats: dict, path: str) -> float:
     return seconds
 
 
-def _budget(args) -> dict:
-    """Check the mode's inputs before the scene is opened; return what the mode needs."""
+def _request(args, options) -> tuple:
+    """The ``RenderRequest`` of the command line (checked), and the director map file an
+    xs or xsl render reads instead of computing its maps (None without --map/--maps)."""
+    from ...core.sampling.render_request import RenderRequest
+
     if args.mode == "guided":
-        return {"guided": guided_options_from_args(args), "map_options": map_options_from_args(args)}
+        return RenderRequest("guided", options, guided=guided_options_from_args(args),
+                             map_options=map_options_from_args(args)).check(), None
     if args.time_budget is not None:
         raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
     stats = _read_budget(args.budget_from) if args.budget_from else None
+    request = RenderRequest(args.mode, options, noise_threshold=args.noise_threshold)
     if args.mode in ("xs", "xsl"):
-        if args.map:
-            return {"map": Path(args.map)}
-        if args.maps:
-            return {"map": _map_file(args)}
-        return {"compute_maps": map_options_from_args(args)}
+        if args.map or args.maps:
+            return request.check(), Path(args.map) if args.map else _map_file(args)
+        return replace(request, map_options=map_options_from_args(args)).check(), None
     if args.mode == "uniform":
         if args.equal_time is not None:
             if args.equal_time < 0:
                 if stats is None:
                     raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-                return {"seconds": _render_budget(stats, args.budget_from), "from": args.budget_from}
+                return replace(request, seconds=_render_budget(stats, args.budget_from),
+                               budget_from=args.budget_from).check(), None
             if args.equal_time <= 0:
                 raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
-            return {"seconds": args.equal_time}
+            return replace(request, seconds=args.equal_time).check(), None
         if args.spp is not None:
-            return {"spp": args.spp}
+            return replace(request, spp=args.spp).check(), None
         if stats is not None:
-            return {"spp": max(1, int(round(float(stats["mean_spp"])))), "from": args.budget_from,
-                    "budget_mean_spp": float(stats["mean_spp"])}
+            return replace(request, spp=max(1, int(round(float(stats["mean_spp"])))),
+                           budget_from=args.budget_from,
+                           budget_mean_spp=float(stats["mean_spp"])).check(), None
         raise InputError("--mode uniform needs --spp N, --budget-from STATS.json or --equal-time SECONDS")
     if args.mode == "adaptive":
         if args.equal_time is not None and args.equal_time > 0:
-            return {"seconds": args.equal_time}
+            return replace(request, seconds=args.equal_time).check(), None
         if stats is not None:
-            return {"seconds": _render_budget(stats, args.budget_from), "from": args.budget_from}
+            return replace(request, seconds=_render_budget(stats, args.budget_from),
+                           budget_from=args.budget_from).check(), None
         raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
-    return {}
+    return request.check(), None
 
 
 def _map_file(args) -> Path:
@@ -215,14 +219,13 @@ def run(args) -> int:
     options = render_options_from_args(args)
     out = Path(args.out)
     frames = _frames(args)
-    budget = _budget(args)
-    if frames is not None and "map" in budget:
-        raise InputError("--frames computes every frame's own maps; --map and --maps hold one frame's")
+    request, map_file = _request(args, options)       # checked already (``check``)
     started = time.perf_counter()
-    director_map = _read_map(budget["map"]) if "map" in budget else None
+    director_map = _read_map(map_file) if map_file is not None else None
     map_seconds = time.perf_counter() - started
 
     from ...addon.maps.director_maps import MapWarning
+    from ...addon.render_dispatch import request_frame_job
     from ...addon.scene.blend_session import open_blend
     from ...addon.scene.state import preserved_scene
     from ...core.maps.files import write_map_set
@@ -236,7 +239,7 @@ def run(args) -> int:
     if frames is not None:
         from .render_animation import render_frames
 
-        return render_frames(scene, args, options, budget, frames, out)
+        return render_frames(scene, args, request, frames, out)
     bar = None if args.quiet else ProgressBar(args.mode)
     # Inside Blender (the batch entry) this is the user's open scene: give its frame back.
     with preserved_scene(scene):
@@ -249,8 +252,8 @@ def run(args) -> int:
         try:
             with InterruptToCancel() as interrupt, warnings_as_lines(MapWarning, XMapWarning):
                 progress = interrupt.wrap(bar)
-                job = mode_frame_job(args, options, budget, director_map=director_map,
-                                     map_seconds=map_seconds, progress=progress)
+                job = request_frame_job(request, director_map=director_map, map_seconds=map_seconds,
+                                        progress=progress)
                 result = run_steps(job(scene), progress)
         finally:
             if bar is not None:
@@ -261,12 +264,8 @@ def run(args) -> int:
     for warning in outcome.warnings:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     stats = outcome.stats
-    stats.update(file=str(args.scene), out=str(out))
-    if "from" in budget:
-        stats["budget_from"] = budget["from"]
-    if "budget_mean_spp" in budget:
-        stats["budget_mean_spp"] = budget["budget_mean_spp"]
-    write_render_outputs(out, outcome.image, outcome.samples, stats, spp_scale(args, options, outcome),
+    stats.update(file=str(args.scene), out=str(out), **request.budget_stats())
+    write_render_outputs(out, outcome.image, outcome.samples, stats, spp_scale(request, outcome),
                          options.seed, args.stats)
     print(summary_line(args.mode, stats, out))
     return 0

@@ -22,7 +22,7 @@ def maps_folder(save_maps: str | Path, frame: int) -> Path:
     return Path(save_maps) / f"{frame:04d}"
 
 
-def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], out: Path) -> int:
+def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> int:
     from ...addon.frame_jobs import frames_steps
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
@@ -33,14 +33,15 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
     from ..interrupt import InterruptToCancel
     from ..progress_bar import ProgressBar
     from .common import warnings_as_lines
-    from .render_modes import mode_frame_job, spp_scale, summary_line
+    from ...addon.render_dispatch import request_frame_job
+    from .render_modes import spp_scale, summary_line
 
     save_maps = Path(args.save_maps) if args.save_maps else None
     cache_dir = save_maps or Path(tempfile.mkdtemp(prefix="xsl-rays-"))
 
-    sequence = SequenceBudget(budget["guided"].time_budget, len(frames)) if args.mode == "guided" else None
-
-    job = mode_frame_job(args, options, budget, cache_dir, sequence)
+    # A guided range shares its time among its frames.
+    sequence = SequenceBudget(request.guided.time_budget, len(frames)) if request.guided else None
+    job = request_frame_job(request, cache_dir, sequence)
 
     def on_frame(result) -> dict:
         path = Path(frame_path(str(out), result.frame))
@@ -49,7 +50,7 @@ def render_frames(scene, args, options, budget: dict, frames: tuple[int, ...], o
         for warning in result.outcome.warnings:
             print(f"xsl-render: warning: frame {result.frame}: {warning}", file=sys.stderr)
         write_render_outputs(path, result.outcome.image, result.outcome.samples, stats,
-                             spp_scale(args, options, result.outcome), options.seed)
+                             spp_scale(request, result.outcome), request.options.seed)
         if save_maps is not None and result.maps is not None:
             write_map_set(maps_folder(save_maps, result.frame), result.maps)
         print(f"frame {result.frame}: " + summary_line(args.mode, stats, path)

@@ -14,6 +14,7 @@ from ...core.errors import InputError, SettingError
 FIELD_FLAGS = {
     "ceiling": "--max-spp",             # CurvesSettings, the contestants' and references' ceiling
     "exponent": "--guided-exponent",    # GuidedOptions
+    "seconds": "--equal-time",          # RenderRequest: uniform's equal time, adaptive's
     "longest_side": "--size",           # ValidationSettings
     "setup": "--worker-setup",          # WorkerSetup (farm)
     "package": "--worker-package",

@@ -1,0 +1,61 @@
+"""The render request every front end builds (``core.sampling.render_request``): checked once,
+its errors naming settings (the command line words them as its flags)."""
+from __future__ import annotations
+
+import pytest
+from support.cli_wording import refused_in_flags
+
+from xsl_render.core.errors import SettingError
+from xsl_render.core.maps.options import MapOptions
+from xsl_render.core.sampling.guided_plan import GuidedOptions
+from xsl_render.core.sampling.render_options import RenderOptions
+from xsl_render.core.sampling.render_request import GUIDED_SPP, MODES, RenderRequest
+
+OPTIONS = RenderOptions(max_spp=64)
+GUIDED = GuidedOptions(time_budget=5.0)
+
+
+@pytest.mark.parametrize("request_, spp", [
+    (RenderRequest("gold", OPTIONS), 64.0),
+    (RenderRequest("uniform", OPTIONS, spp=16), 16.0),
+    (RenderRequest("uniform", OPTIONS, seconds=3.0), 64.0),
+    (RenderRequest("adaptive", OPTIONS, seconds=3.0, noise_threshold=0.05), 64.0),
+    (RenderRequest("adaptive", OPTIONS, noise_threshold=0.05), 64.0),      # up to the ceiling
+    (RenderRequest("xs", OPTIONS, map_options=MapOptions()), 64.0),
+    (RenderRequest("xsl", OPTIONS), 64.0),                                  # its map from a file
+    (RenderRequest("guided", OPTIONS, guided=GUIDED), float(GUIDED_SPP)),
+    (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=5.0, max_spp=8)), 8.0),
+])
+def test_requests_each_mode_takes(request_, spp):
+    assert request_.check() is request_
+    assert request_.mode in MODES
+    assert request_.estimator_spp == spp             # what auto's bias tolerance is set for
+    assert request_.unbounded == (request_.mode == "guided" and request_.guided.max_spp is None)
+
+
+@pytest.mark.parametrize("request_, message", [
+    (RenderRequest("fast", OPTIONS), "--mode must be one of gold, xs"),
+    (RenderRequest("guided", OPTIONS), "--mode guided needs --time-budget SECONDS"),
+    (RenderRequest("uniform", OPTIONS, spp=8, guided=GUIDED),
+     r"--time-budget is for --mode guided \(use --equal-time with --mode uniform\)"),
+    (RenderRequest("gold", OPTIONS, spp=8), "--spp is for --mode uniform"),
+    (RenderRequest("uniform", OPTIONS, spp=128), "--spp 128 is above --max-spp 64, the ceiling of every mode"),
+    (RenderRequest("uniform", OPTIONS), "--mode uniform needs either --spp or --equal-time"),
+    (RenderRequest("uniform", OPTIONS, spp=8, seconds=2.0), "--mode uniform needs either --spp or --equal-time"),
+    (RenderRequest("uniform", OPTIONS, seconds=float("nan")), "--equal-time must be positive"),
+    (RenderRequest("adaptive", OPTIONS, seconds=-1.0), "--equal-time must be positive"),
+    (RenderRequest("adaptive", OPTIONS, noise_threshold=0.0), r"--noise-threshold must be in \(0, 1\]"),
+    (RenderRequest("uniform", RenderOptions(max_spp=4, min_spp=8), spp=2), "--min-spp 8 is larger than --max-spp 4"),
+    (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=0.0)), "--time-budget must be a positive"),
+])
+def test_impossible_requests_are_refused_naming_the_setting(request_, message):
+    with refused_in_flags(message) as refused:
+        request_.check()
+    assert isinstance(refused.value, SettingError)
+    assert "--" not in str(refused.value)            # core names fields; the front end words them
+
+
+def test_the_budget_source_is_recorded():
+    request = RenderRequest("uniform", OPTIONS, spp=12, budget_from="run.json", budget_mean_spp=11.6)
+    assert request.budget_stats() == {"budget_from": "run.json", "budget_mean_spp": 11.6}
+    assert RenderRequest("gold", OPTIONS).budget_stats() == {}
