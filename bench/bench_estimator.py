@@ -38,7 +38,7 @@ METRICS = ("flip", "flip_tile95", "flip_share", "mse")
 FLOOR_SPP = 256
 
 
-def _register(scene: str, floor: bool) -> tuple[str, ...]:
+def _register(scene: str, floor: bool, rates: bool = True, scored: bool = False) -> tuple[str, ...]:
     from xsl_render.core.validation.contestants import (Contestant, CurveSpec, register_curve,
                                                         time_matched_curve, uniform_budgets)
 
@@ -49,14 +49,23 @@ def _register(scene: str, floor: bool) -> tuple[str, ...]:
                     for spp in sorted(set(uniform_budgets(ceiling)) | set(extra))]
         return register_curve(CurveSpec(name, label, points)).name
 
-    rates = RATES if scene in HETEROGENEOUS else (1.0,)
+    swept = (RATES if scene in HETEROGENEOUS else (1.0,)) if rates else ()
     names = [curve(f"biased_{rate:g}", f"marching {rate:g}",
                    {"estimator": "biased", "step_rate": rate}, (FLOOR_SPP,) if floor else ())
-             for rate in rates]
+             for rate in swept]
     names.append(curve("auto", "auto", {"estimator": "auto"}))
     register_curve(time_matched_curve("guided", "guided, auto", (1 / 4, 1 / 2), curve="guided_auto",
                                       params={"importance": "none", "estimator": "auto"}))
-    return ("uniform", *names, "auto", "guided_auto")
+    guided = ["guided_auto"]
+    if scored:
+        # The allocation by the pilot's error scores (the default before it was measured
+        # against plain uniform sampling at equal time).
+        register_curve(time_matched_curve("guided", "guided, auto, scored 0.15", (1 / 4, 1 / 2),
+                                          curve="guided_auto_scored",
+                                          params={"importance": "none", "estimator": "auto",
+                                                  "exponent": 0.15}))
+        guided.append("guided_auto_scored")
+    return ("uniform", *names, *guided)
 
 
 def _best_fixed(data: dict) -> list[tuple[str, float, dict]]:
@@ -72,14 +81,21 @@ def report_scene(scene: str, data: dict) -> list[str]:
     lines = [f"\n{scene} ({size[0]}x{size[1]}, {len(data['seeds'])} repeat(s), reference "
              f"{data['reference']['inputs']['spp']} spp)",
              f"{'run':28s} {'s':>6s} {'FLIP':>7s} {'p95tile':>7s} {'>0.103%':>7s} {'MSE':>9s} "
-             f"{'chosen':>10s} | vs uniform: FLIP p95tile share MSE | vs best fixed: FLIP p95tile share MSE"]
-    best = {"best_fixed": _best_fixed(data)}
+             f"{'chosen':>10s} | vs uniform: FLIP p95tile share MSE | vs best fixed: FLIP p95tile share MSE"
+             " | vs auto: FLIP p95tile share MSE"]
+    best = {"best_fixed": _best_fixed(data)} if _best_fixed(data) else {}
+    # The auto curve as a baseline: what a guided run adds to plain uniform sampling with
+    # the same estimator choice.
+    auto = {"auto": [(name, run["seconds"], run) for name, run in data["runs"].items()
+                     if run["curve"] == "auto"]}
     for name, run in data["runs"].items():
         chosen = ((run["repeats"][0].get("stats") or {}).get("estimator") or {}) if run["repeats"] else {}
         rate = {None: "scene", True: f"march {chosen.get('step_rate') or 'sc'}",
                 False: "null sc."}[chosen.get("biased")]
         over = run["speedups"].get("uniform", {})
         against = speedups_against(best, (name, run["seconds"], run), METRICS).get("best_fixed", {})
+        over_auto = ({} if run["curve"] == "auto" else
+                     speedups_against(auto, (name, run["seconds"], run), METRICS).get("auto", {}))
 
         def fmt(speedups, metric):
             entry = speedups.get(metric) or {}
@@ -90,7 +106,8 @@ def report_scene(scene: str, data: dict) -> list[str]:
                      f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} "
                      f"{run['mse'] or 0:9.2e} {rate:>10s} | "
                      + " ".join(fmt(over, m) for m in METRICS) + " | "
-                     + " ".join(fmt(against, m) for m in METRICS))
+                     + " ".join(fmt(against, m) for m in METRICS) + " | "
+                     + " ".join(fmt(over_auto, m) for m in METRICS))
     lines.append("speedup = time the curve needs for the run's error / the run's time; "
                  "* extrapolated beyond the curve's measured range")
     return lines
@@ -104,6 +121,10 @@ def main(argv=None) -> int:
     parser.add_argument("--resolution", default=None, help="render size WxH (default: SIZES)")
     parser.add_argument("--floor", action="store_true", help=f"also each step rate at {FLOOR_SPP} spp")
     parser.add_argument("--no-guided", action="store_true", help="leave out the guided runs")
+    parser.add_argument("--no-rates", action="store_true",
+                        help="leave out the step-rate sweep (no 'best fixed' column)")
+    parser.add_argument("--scored", action="store_true",
+                        help="also guided with the pilot's error scores (--guided-exponent 0.15)")
     args = parser.parse_args(argv)
     scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
     unknown = [s for s in scenes if s not in SCENES]
@@ -118,9 +139,9 @@ def main(argv=None) -> int:
     lines = [f"bench_estimator: {', '.join(scenes)} at {args.resolution or 'SIZES'}, "
              f"ceiling 64, median of {args.repeats}"]
     for scene in scenes:
-        curves = _register(scene, args.floor)
+        curves = _register(scene, args.floor, rates=not args.no_rates, scored=args.scored)
         if args.no_guided:
-            curves = tuple(c for c in curves if c != "guided_auto")
+            curves = tuple(c for c in curves if not c.startswith("guided_"))
         settings = CurvesSettings(ceiling=64, resolution=size or SIZES[scene], repeats=args.repeats, curves=curves,
                                   vdp=False)
         data = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)

@@ -11,8 +11,8 @@ from support.cli_wording import refused_in_flags
 
 from xsl_render.core.errors import InputError
 from xsl_render.core.sampling.guided_plan import (FINAL_PASS_PIECES, SCORE_FLOOR, UNBOUNDED_SPP,
-                                                  BudgetPacer, GuidedOptions,
-                                                  allocate, error_scores, plan_final_pass,
+                                                  BudgetPacer, GuidedOptions, IMPORTANCE_EXPONENT,
+                                                  allocate, error_scores, plan_final_pass, sobol_friendly,
                                                   round_to_levels, tile_means)
 from xsl_render.core.sampling.pass_merge import PassAccumulator
 from xsl_render.core.sampling.tile_plan import tile_windows
@@ -98,16 +98,17 @@ def test_exponent_zero_is_uniform():
     options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
     scores = np.random.default_rng(0).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
     final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=6 * 64 * 48)
-    assert {rect.spp for rect in final.rects} == {6}
-    assert [(rect.col0, rect.col1) for rect in final.rects] == [(0, 64)] * len(final.rects)   # full rows
+    assert {rect.spp for rect in final.rects} == {6} and final.flat
 
 
-def test_importance_weighs_the_scores():
-    windows = tile_windows(64, 32, 32)
-    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=32, level_ratio=1.1)
-    final = plan_final_pass(np.ones(2), np.array([1.0, 3.0]), 64, 32, options, pixel_samples=8 * 64 * 32)
+@pytest.mark.parametrize("exponent", [0.0, 1.0])
+def test_importance_weighs_the_samples_whatever_the_scores_exponent(exponent):
+    options = GuidedOptions(time_budget=1.0, exponent=exponent, tile_size=32, level_ratio=1.01)
+    importance = np.array([0.05, 1.0])
+    final = plan_final_pass(np.ones(2), importance, 64, 32, options, pixel_samples=100 * 64 * 32)
     spp, _ = _spp_map(final, 64, 32)
-    assert spp[:, 32:].min() > 2 * spp[:, :32].max()
+    ratio = spp[:, 32:].mean() / spp[:, :32].mean()
+    assert ratio == pytest.approx(20 ** IMPORTANCE_EXPONENT, rel=0.05)     # gently: 1.57x
 
 
 @pytest.mark.parametrize("pixel_samples", [0.0, 10.0, 64 * 48 * 0.5])
@@ -122,10 +123,20 @@ def test_every_pixel_gets_a_sample_however_small_the_budget(pixel_samples):
     assert covered.min() == covered.max() == 1
 
 
-def test_final_pass_comes_in_pieces_the_pacer_can_correct():
+def test_a_flat_plan_is_three_columns():
     options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
     final = plan_final_pass(np.ones(len(tile_windows(96, 54, 16))), None, 96, 54, options,
                             pixel_samples=32 * 96 * 54)
+    assert final.flat
+    assert [rect.window for rect in final.rects] == [(0, 54, 0, 32), (0, 54, 32, 64), (0, 54, 64, 96)]
+    assert {rect.spp for rect in final.rects} == {32}
+
+
+def test_final_pass_comes_in_pieces_the_pacer_can_correct():
+    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16, level_ratio=1.5)
+    scores = np.ones(len(tile_windows(96, 54, 16)))
+    scores[0] = 3.0                                      # not flat: pieces to pace
+    final = plan_final_pass(scores, None, 96, 54, options, pixel_samples=32 * 96 * 54)
     assert len(final.rects) >= FINAL_PASS_PIECES
     assert max(rect.samples for rect in final.rects) <= final.samples / FINAL_PASS_PIECES + 96 * 32
     covered = np.zeros((54, 96), int)
@@ -149,6 +160,26 @@ def test_pacer_rescales_the_renders_still_to_come():
     with pytest.raises(IndexError):
         pacer.scale(1.0)
     assert BudgetPacer([1.0], overhead=0.0).scale(-1.0) == 0.0
+
+
+@pytest.mark.parametrize("took, ratio", [(2.1, 2.0), (0.6, 0.5), (100.0, 4.0), (0.1, 0.25)])
+def test_pacer_plans_the_rest_at_the_rate_the_finished_renders_showed(took, ratio):
+    pacer = BudgetPacer([1.0, 1.0, 1.0], overhead=0.1)
+    assert pacer.cost_ratio == 1.0
+    assert pacer.scale(3.3) == pytest.approx(1.0)
+    pacer.record(took, 1.0)                              # the pilot's rate was off by ``ratio``
+    assert pacer.cost_ratio == pytest.approx(ratio)      # (clamped to [1/4, 4])
+    assert pacer.scale(2.2) == pytest.approx(min(2.0, 1.0 / ratio))   # the rest at the real rate
+    assert pacer.scale(1e6) == 2.0                                    # never past twice the plan
+    pacer.record(1.0, 0.0)                               # nothing planned: nothing learnt
+    assert pacer.cost_ratio == pytest.approx(ratio)
+
+
+def test_side_by_side_renders_are_capped_against_the_repriced_plan():
+    pacer = BudgetPacer([1.0, 1.0], overhead=0.0, side_by_side=True)
+    pacer.scale(2.0)
+    pacer.record(0.25, 1.0)                              # the pilot overstated the cost 4x
+    assert pacer.scale(100.0) == pytest.approx(8.0)      # twice the re-priced plan
 
 
 @pytest.mark.parametrize("field, value, message", [
@@ -208,3 +239,10 @@ def test_a_sequence_never_starves_a_frame():
     sequence = SequenceBudget(per_frame=2.0, frames=2)
     sequence.record(9.0)
     assert sequence.next_budget() == MIN_FRAME_SHARE * 2.0
+
+
+@pytest.mark.parametrize("count, friendly", [(0, 1), (1, 1), (2, 2), (3, 3), (5, 5), (9, 8), (13, 13),
+                                             (16, 16), (19, 16), (20, 20), (24, 24), (39, 32), (40, 40),
+                                             (70, 70), (600, 600)])
+def test_a_whole_frame_count_just_above_a_power_of_two_is_rounded_down_to_it(count, friendly):
+    assert sobol_friendly(count) == friendly

@@ -5,13 +5,19 @@
    (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
 2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else
    (outside it for a frame of an animation, whose sequence pays it back: ``sync_outside``).
-3. Pilot: the whole frame at a quarter of its resolution, at most 16 samples, for at most a
-   small share of the budget (Cycles' own time limit; the count is read back from Cycles).
-4. Scores: the pilot denoised, its display luminance's gradient per tile
-   (``core/sampling/guided_plan``, which also says why the pilot is thrown away).
+3. Pilot: the whole frame at a quarter of its resolution, one sample, then at most 16 for at
+   most a small share of the budget (2 % when nothing is scored); the two renders' times
+   give the cost of a sample without a render's fixed cost.
+4. Scores (``exponent`` > 0 only): the pilot denoised, its display luminance's gradient per
+   tile (``core/sampling/guided_plan``, which also says why the pilot is thrown away and why
+   the default spreads the samples evenly instead).
 5. Final pass: per rectangle, its samples from the first, as many as fit in what is left of
    the budget once the final denoise is set aside; a pacer rescales every next rectangle to
-   the clock. Every pixel is rendered in exactly one Cycles session.
+   the clock, at the rate the finished rectangles showed. A flat plan (nothing scored, no
+   importance map: the default) is three columns of the frame, each later one's count set by
+   what those before it cost at full resolution (a quarter-resolution pilot overstates a full
+   frame's cost per pixel by up to a third: Cycles pays a fixed cost per sample pass). Every
+   pixel is rendered in exactly one Cycles session.
 6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
 
 Every setting touched is put back (``preserved_scene``) after success, error or cancel.
@@ -24,7 +30,7 @@ import numpy as np
 
 from ...core.progress import ProgressCallback, Steps, run_steps
 from ...core.sampling.guided_plan import (BudgetPacer, GuidedOptions, error_scores, plan_final_pass,
-                                          tile_means)
+                                          sobol_friendly, tile_means)
 from ...core.sampling.pass_merge import PassAccumulator
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.tile_plan import check_director_map, tile_windows
@@ -49,6 +55,8 @@ _PILOT_MAX_SPP = 16
 _PILOT_REDUCE = 4
 #: The pilot keeps at least this many pixels on its short edge (tiny frames are reduced less).
 _PILOT_MIN_EDGE = 16
+#: Most of the budget a pilot that only times the render (exponent 0: nothing scored) takes.
+_CLOCK_PILOT_FRACTION = 0.02
 
 
 def pilot_reduce(width: int, height: int) -> int:
@@ -134,37 +142,46 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             # as its share allows. (No Cycles time limit: a limit set and unset at the same
             # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
             reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-            pilot_share = guided.pilot_fraction * (budget - clock.now() - reserve)
+            # A pilot that only times the render (nothing scored) takes less.
+            fraction = guided.pilot_fraction if guided.exponent else min(guided.pilot_fraction,
+                                                                         _CLOCK_PILOT_FRACTION)
+            pilot_share = fraction * (budget - clock.now() - reserve)
             reduce = pilot_reduce(width, height)
             paused = clock.pause()
             yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
             clock.resume(paused)
             began = clock.now()
-            pilot = renderer.render(None, 1, reduce=reduce)
-            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(pilot.seconds, 1e-6))
-            have = max(1, min(guided.ceiling, _PILOT_MAX_SPP, fit))
-            if have > 1:
-                pilot = renderer.render(None, have, reduce=reduce)
+            first = renderer.render(None, 1, reduce=reduce)
+            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
+            # (Two samples at least where the rate is all it measures: its two renders' times.)
+            have = max(1 if guided.exponent else min(2, guided.ceiling),
+                       min(guided.ceiling, _PILOT_MAX_SPP, fit))
+            pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
             phases["pilot"] = clock.now() - began
             # No time limit: every pilot pixel has exactly ``have`` samples.
-            pilot_samples = float(have * pilot.pixels.shape[0] * pilot.pixels.shape[1])
-            # Seconds per pixel-sample: a pilot pixel traces what a full one does per sample.
-            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / max(1.0, pilot_samples)
+            pixels = float(pilot.pixels.shape[0] * pilot.pixels.shape[1])
+            # Seconds per pixel-sample (a pilot pixel traces what a full one does per sample):
+            # from the two renders' difference, which leaves out a render's fixed cost.
+            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / (have * pixels)
+            if have > 1 and pilot.seconds > first.seconds:
+                rate = max((pilot.seconds - first.seconds) / ((have - 1) * pixels), 0.5 * rate)
             tiles.append(tile_entry((0, height, 0, width), pilot)
                          | {"pass": "pilot", "resolution_divisor": reduce})
 
-            # Scores from the denoised pilot.
+            # Scores from the denoised pilot (none at exponent 0: every tile alike).
             paused = clock.pause()
-            yield 0.15, f"guided: scoring the pilot ({have} spp)"
+            yield 0.15, f"guided: scoring the pilot ({have} spp)" if guided.exponent else "guided: planning"
             clock.resume(paused)
             began = clock.now()
-            # Denoised whatever the final image gets: the score is the error a denoised
-            # frame keeps, and a raw pilot's gradient is mostly its noise.
-            from .denoise import denoise
+            scoring_denoise, scores = 0.0, np.ones(len(windows))
+            if guided.exponent:
+                # Denoised whatever the final image gets: the score is the error a denoised
+                # frame keeps, and a raw pilot's gradient is mostly its noise.
+                from .denoise import denoise
 
-            scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
-            scoring_denoise = clock.now() - began
-            scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
+                scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
+                scoring_denoise = clock.now() - began
+                scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
             weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
             phases["scoring"] = clock.now() - began
 
@@ -176,7 +193,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             final = plan_final_pass(scores, weights, width, height, guided,
                                     max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate)
             rects = final.rects
-            pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S)
+            pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S,
+                                side_by_side=final.flat)
             began = clock.now()
             for index, rect in enumerate(rects):
                 paused = clock.pause()
@@ -185,7 +203,13 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 factor = pacer.scale(budget - clock.now() - denoise_reserve)
                 # Every pixel gets a sample, even when the clock is already out.
                 spp = max(1, min(int(round(rect.spp * factor)), guided.ceiling))
+                if final.flat:
+                    # Every pixel alike: as many as fit, at a count Cycles' patterns
+                    # stratify well.
+                    spp = sobol_friendly(max(1, min(int(rect.spp * factor), guided.ceiling)))
                 piece = renderer.render(rect.window, spp)
+                # (A scene sync Cycles did on the way is not what a sample costs.)
+                pacer.record(piece.seconds - piece.sync_seconds, rate * spp * rect.area)
                 image.add(rect.window, piece.pixels, spp)
                 guides.add(rect.window, piece.guides, spp)
                 tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})

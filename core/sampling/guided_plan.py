@@ -10,8 +10,14 @@ pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from a half-r
 pilot), for one cheap pilot instead of two, and the error of a denoised frame sits where the
 image has edges, highlights and glows.
 
-The budget then goes to the tiles in proportion to ``(score * importance) ** exponent``, every
-pixel rendered from its first sample in one Cycles session. Two findings shape this:
+The budget then goes to the tiles in proportion to ``score ** exponent * importance **
+IMPORTANCE_EXPONENT``, every pixel rendered from its first sample in one Cycles session.
+The default exponent is 0: nothing is scored and, without an importance map, every pixel
+gets the same samples (the pilot then only times the render). Measured at equal time against
+the same estimator's uniform curve, the scored allocation (exponent 0.15) kept 0.6-0.8x of
+plain uniform sampling's speed on road and balls_a (``bench/bench_estimator.py --scored``,
+README): what it moves is worth less than the pilot, the scoring denoise and the pieces it
+costs. Three findings shape this:
 
 - FLIP after denoising falls only about as spp^-0.27 on these scenes, and its error is spread
   evenly over the frame (the worst 20 % of 32-px tiles hold ~30 % of it), so moving samples
@@ -25,6 +31,9 @@ pixel rendered from its first sample in one Cycles session. Two findings shape t
   sequence), and merging two seeds of 8 costs ~5 % FLIP against one render of 16. A
   full-resolution pilot continued by the final pass therefore loses what it was meant to
   win; the low-resolution pilot is thrown away instead.
+
+- Cycles' sample patterns stratify best at powers of two, and after denoising it shows
+  (``sobol_friendly``): a whole frame just above a power of two is rendered at it.
 
 ``importance`` is the director map (1 everywhere unless asked for). Counts are rounded to
 powers of ``level_ratio`` so that neighbouring tiles share them and merge into few renders.
@@ -57,6 +66,12 @@ SCORE_FLOOR = 0.05
 #: make up for a region that costs more per sample than the pilot said (a fog box on the
 #: floor costs twice the sky).
 FINAL_PASS_PIECES = 10
+#: A flat final pass (every pixel planned alike) is cut into this many columns.
+FLAT_PASS_PIECES = 3
+#: The director map weighs a tile's samples as its mean to this power (the gentle exponent
+#: the pilot's scores had when both were weighed together; linear, as the paper's XSL map
+#: scales samples, loses FLIP badly).
+IMPORTANCE_EXPONENT = 0.15
 
 
 @dataclass(frozen=True)
@@ -72,9 +87,12 @@ class GuidedOptions:
     pilot_fraction
         Most of the budget (after maps and scene sync) the low-resolution pilot may take.
     exponent
-        Allocation exponent on the tile scores (0: uniform).
+        Allocation exponent on the pilot's error scores. 0 (the default) scores nothing:
+        the pilot only times the render and the samples are spread evenly, or by the
+        importance map alone (see the module docstring for why).
     importance
-        Director map weighting the scores: "none", "x", "xs" or "xsl".
+        Director map weighting the allocation: "none", "x", "xs" or "xsl" (the tiles'
+        weights go as its mean to ``IMPORTANCE_EXPONENT``).
     tile_size
         Edge of the tiles the allocation is made on, in pixels.
     level_ratio
@@ -84,7 +102,7 @@ class GuidedOptions:
     time_budget: float
     max_spp: int | None = None
     pilot_fraction: float = 0.05
-    exponent: float = 0.15
+    exponent: float = 0.0
     importance: str = "none"
     tile_size: int = 32
     level_ratio: float = 1.5
@@ -206,13 +224,14 @@ class FinalPass:
 
     rects: list[Rect]
     totals: np.ndarray               # (n_tiles,) planned samples per pixel of each tile
+    flat: bool = False               # every pixel planned alike
 
     @property
     def samples(self) -> int:
         return sum(rect.samples for rect in self.rects)
 
     def to_dict(self) -> dict:
-        return {"renders": len(self.rects), "samples": self.samples,
+        return {"renders": len(self.rects), "samples": self.samples, "flat": self.flat,
                 "rects": [rect.to_dict() for rect in self.rects]}
 
 
@@ -225,12 +244,23 @@ def plan_final_pass(scores: np.ndarray, importance: np.ndarray | None, width: in
     if len(scores) != len(windows) or (importance is not None and len(importance) != len(windows)):
         raise ValueError("one score (and importance) per tile is needed")
     areas = np.array([(r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in windows], np.float64)
-    weighted = np.asarray(scores, np.float64) * (1.0 if importance is None else np.asarray(importance, np.float64))
-    weights = np.maximum(weighted, 1e-12) ** options.exponent
+    weights = np.maximum(np.asarray(scores, np.float64), 1e-12) ** options.exponent
+    if importance is not None:
+        weights = weights * np.maximum(np.asarray(importance, np.float64), 1e-12) ** IMPORTANCE_EXPONENT
     totals = allocate(weights, areas, 1, pixel_samples - areas.sum(), options.ceiling)
     # Levels anchored at the mean count: a flat allocation stays exact.
     mean = float((areas * totals).sum() / areas.sum())
     counts = np.clip(round_to_levels(totals, options.level_ratio, anchor=round(mean)), 1, options.ceiling)
+    if len(set(counts.tolist())) == 1:
+        # A flat plan: the frame in three columns, each next one paced by what those before
+        # it cost at full resolution (the last one makes up for the second's timing noise;
+        # more pieces are only more fixed costs). Side by side, not one above the other: a
+        # frame's top and bottom differ most in cost (sky and fog on the floor: twice per
+        # sample), its columns least.
+        edges = [width * k // FLAT_PASS_PIECES for k in range(FLAT_PASS_PIECES + 1)]
+        rects = [Rect(0, height, left, right, int(counts[0])) for left, right in zip(edges, edges[1:])
+                 if right > left]
+        return FinalPass(rects=rects, totals=totals, flat=True)
     rects = merge_rects([Rect(r0, r1, c0, c1, int(count))
                          for (r0, r1, c0, c1), count in zip(windows, counts)])
     return FinalPass(rects=split_rects(rects, FINAL_PASS_PIECES), totals=totals)
@@ -250,6 +280,29 @@ def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
     return out
 
 
+#: A whole-frame count this little above a power of two is rounded down to it (see
+#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``: measured at 16-24 samples, and a
+#: quarter of a large budget left unused would cost more than a pattern's evenness wins.
+POWER_OF_TWO_SLACK = 1.25
+POWER_OF_TWO_LARGEST = 32
+
+
+def sobol_friendly(count: int) -> int:
+    """``count`` samples per pixel, or the power of two below it when that is within
+    ``POWER_OF_TWO_SLACK``: Cycles' sample patterns stratify best at powers of two, and after
+    denoising the difference shows. Measured (uniform, ray marching, 256x192, seed 0, FLIP
+    against the converged reference): balls_a 16 spp 0.0407, 17 spp 0.0431, 20 spp 0.0439,
+    24 spp 0.0393; balls_b 16 / 18 / 20 spp 0.0516 / 0.0518 / 0.0506. So 17-20 samples
+    cost up to a quarter more time than 16 for no better (or a worse) frame."""
+    count = int(count)
+    if count < 2:
+        return max(count, 1)
+    power = 1 << (count.bit_length() - 1)
+    if power > POWER_OF_TWO_LARGEST:
+        return count
+    return power if count < POWER_OF_TWO_SLACK * power else count
+
+
 class BudgetPacer:
     """Keeps a sequence of renders inside a time budget.
 
@@ -257,15 +310,40 @@ class BudgetPacer:
     ``sample_seconds[k]`` (its samples). Before it starts, ``scale(time_left)`` says by how
     much to scale its samples so that the renders still to come fit in the time left (as
     the caller's clock reads it): slower than planned, fewer samples for the rest; faster,
-    more, at most ``max_scale`` times the plan.
+    more, at most ``max_scale`` times the plan (a region cheaper than the pilot said must not
+    take the time of one dearer than it said: a fog floor after the sky), or for renders
+    ``side_by_side`` of like cost, the plan as the finished ones re-priced it.
+
+    ``record(seconds, planned)`` after a render teaches it the real cost of a planned second
+    (the plan's rate comes from a small pilot): the renders still to come are then planned
+    at the rate the finished ones showed, so the last ones neither starve nor leave the
+    budget unspent.
     """
 
-    def __init__(self, sample_seconds: list[float], overhead: float, max_scale: float = 2.0):
+    def __init__(self, sample_seconds: list[float], overhead: float, max_scale: float = 2.0,
+                 side_by_side: bool = False):
         if any(seconds < 0 for seconds in sample_seconds) or overhead < 0:
             raise ValueError("planned seconds must not be negative")
         self._left = list(sample_seconds)
         self.overhead = overhead
         self.max_scale = max_scale
+        self.side_by_side = side_by_side
+        self._spent = self._expected = 0.0
+
+    @property
+    def cost_ratio(self) -> float:
+        """Seconds a planned second has taken so far (1 before any render is recorded;
+        kept within [1/4, 4] so one odd render cannot throw the plan away)."""
+        if self._expected <= 0.0:
+            return 1.0
+        return float(min(4.0, max(0.25, self._spent / self._expected)))
+
+    def record(self, seconds: float, planned: float) -> None:
+        """A render took ``seconds`` (its fixed cost included) for samples the plan priced at
+        ``planned`` seconds (the plan's rate times the samples it really rendered)."""
+        if planned > 0.0 and seconds >= 0.0:
+            self._spent += max(0.0, seconds - self.overhead)
+            self._expected += planned
 
     def scale(self, time_left: float) -> float:
         """Scale for the next render's samples; call once per render, in order."""
@@ -276,7 +354,11 @@ class BudgetPacer:
         if planned <= 0.0:
             return 1.0
         usable = time_left - self.overhead * renders
-        return float(min(self.max_scale, max(0.0, usable / planned)))
+        # ``side_by_side`` renders (a flat plan's halves) cost alike per sample, so the cap
+        # holds against the plan as the finished ones re-priced it: a small pilot may
+        # overstate the cost many times over (a fixed cost per sample pass).
+        cap = self.max_scale / self.cost_ratio if self.side_by_side else self.max_scale
+        return float(min(cap, max(0.0, usable / (planned * self.cost_ratio))))
 
 
 #: A frame of a guided animation is never given less than this share of the per-frame budget,

@@ -121,13 +121,14 @@ def add_guided_arguments(parser, budget_required: bool = False) -> None:
                         required=budget_required,
                         help="guided: seconds for the whole render (maps, passes, denoising)")
     guided.add_argument("--importance", choices=IMPORTANCE_MAPS, default=defaults.importance,
-                        help="guided: director map that weighs the estimated error (default none)")
+                        help="guided: director map that weighs the samples (default none)")
     guided.add_argument("--pilot-fraction", type=argtypes.number(above=0.0, hi=1.0),
                         default=defaults.pilot_fraction,
-                        help=f"guided: share of the budget for the pilot pass (default {defaults.pilot_fraction})")
+                        help="guided: most of the budget a scoring pilot pass takes (default "
+                             f"{defaults.pilot_fraction}; 0.02 at most when nothing is scored)")
     guided.add_argument("--guided-exponent", type=argtypes.number(0.0, 2.0), default=defaults.exponent,
-                        help="guided: samples go as (score x importance) to this power; 0 is "
-                             f"uniform (default {defaults.exponent})")
+                        help="guided: samples go as the pilot's error score to this power "
+                             f"(times the importance map's); 0 scores nothing (default {defaults.exponent})")
     guided.add_argument("--level-ratio", type=argtypes.number(above=1.0, hi=4.0), default=defaults.level_ratio,
                         help="guided: sample counts are rounded to powers of this ratio "
                              f"(default {defaults.level_ratio})")
