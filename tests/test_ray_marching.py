@@ -160,9 +160,30 @@ def test_auto_after_null_scattering_asks_only_the_finest_rate_while_it_fails():
     from xsl_render.core.sampling.volume_estimator import EstimatorChoice
 
     calls = []
-    choice = choose_step_rate(lambda rate: calls.append(rate) or 0.0125, spp=16,
+    # Within the tolerance (0.0125 at 16 spp) but not the switching margin, and past
+    # 0.7 x twice the tolerance (the finest rate's own margin against null scattering).
+    choice = choose_step_rate(lambda rate: calls.append(rate) or 0.018, spp=16,
                               previous=EstimatorChoice("auto", biased=False))
-    assert choice.biased is False and calls == [0.25]     # within the tolerance, not the margin
+    assert choice.biased is False and calls == [0.25]
+
+
+@pytest.mark.parametrize("finest, previous, expected", [
+    (0.0126, None, 0.25),               # over the tolerance, within twice it: still marching
+    (0.024, None, 0.25),
+    (0.026, None, None),                # past twice the tolerance: null scattering
+    (0.0126, (False, None), 0.25),      # after null scattering: within 0.7 x twice it
+    (0.02, (False, None), None),        # ... but not past it (hysteresis)
+    (0.02, (True, 0.25), 0.25),         # after the finest rate: twice the tolerance holds it
+    (0.026, (True, 0.25), None),
+])
+def test_the_finest_rate_beats_null_scattering_within_twice_the_tolerance(finest, previous, expected):
+    from xsl_render.core.sampling.volume_estimator import NULL_SCATTERING_MARGIN, EstimatorChoice
+
+    assert NULL_SCATTERING_MARGIN == 2.0
+    measures = {4.0: 0.5, 2.0: 0.26, 1.0: 0.13, 0.5: 0.037, 0.25: finest}   # street frame 1's
+    before = None if previous is None else EstimatorChoice("auto", biased=previous[0], step_rate=previous[1])
+    choice = choose_step_rate(measures.get, spp=16, previous=before)
+    assert choice.step_rate == expected and choice.biased is (expected is not None)
 
 
 def test_visible_bias_is_relative_to_what_the_transmittance_can_move():
