@@ -120,16 +120,17 @@ def _label(frames: Sequence[int], index: int) -> str:
 
 
 def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
-                    cache_dir) -> FrameJob:
+                    cache_dir, label: str | None = None) -> FrameJob:
     """A frame job for xs / xsl: the frame's maps (rays cached in ``cache_dir``), then the
-    selective render driven by the map named ``mode``."""
+    selective render driven by the map named ``mode`` (its stats call it ``label``, default
+    ``mode``)."""
 
     def prepare(scene) -> Steps[MapSet]:
         return (yield from scaled_steps(map_steps(scene, map_options, size=options.resolution,
                                                   cache_dir=cache_dir), 0.0, 1.0, "maps: "))
 
     def render(scene, maps: MapSet) -> Steps[FrameResult]:
-        outcome = yield from selective_steps(scene, maps.director(mode), options, mode,
+        outcome = yield from selective_steps(scene, maps.director(mode), options, label or mode,
                                              maps.info["seconds"]["total"])
         outcome.stats["maps"] = maps_summary(maps)
         return FrameResult(scene.frame_current, outcome, maps)

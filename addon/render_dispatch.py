@@ -44,9 +44,10 @@ def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = Non
 
     def make(chosen: RenderOptions) -> FrameJob:
         if mode in SELECTIVE_MODES:
+            label = request.label or mode
             if director_map is not None:
-                return map_frame(director_map, chosen, mode, map_seconds)
-            return selective_frame(request.map_options, chosen, mode, cache_dir)
+                return map_frame(director_map, chosen, label, map_seconds)
+            return selective_frame(request.map_options, chosen, mode, cache_dir, label)
         if mode == "guided":
             return guided_frame(request.guided, request.map_options, chosen, cache_dir, sequence)
         return single_render_frame(lambda scene: _baseline(scene, request, chosen, progress), mode,

@@ -22,6 +22,7 @@ from ...core.maps.files import read_map_set, write_map_set
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback, WeightedSteps
 from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.render_request import RenderRequest
 from ...core.validation.compare import compare_with_gold
 from ...core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
                                     map_seconds, scaled_size, scene_variants)
@@ -202,8 +203,22 @@ class _SceneRun:
             inputs["budget_from_hash"] = source["input_hash"]
         return inputs
 
+    @staticmethod
+    def request(variant: Variant, options: RenderOptions, inputs: dict) -> RenderRequest:
+        """The render request of a variant: the gold standard, a selective render from its
+        director map (its stats named after the variant), uniform at a share of the ceiling
+        or at XSL's time, or Cycles' adaptive sampling at XSL's time."""
+        if variant.kind == "gold":
+            return RenderRequest("gold", options)
+        if variant.kind == "selective":
+            return RenderRequest(variant.director, options, label=variant.name)
+        if variant.kind == "uniform" and variant.spp_fraction is not None:
+            return RenderRequest("uniform", options, spp=variant.spp(options.max_spp))
+        return RenderRequest(variant.kind, options, seconds=inputs["budget_s"])
+
     def render(self, variant: Variant) -> dict:
-        from ..cycles import selective_render as sr
+        from ...core.progress import run_steps
+        from ..render_dispatch import request_frame_job
 
         exr = self.folder / f"{variant.name}.exr"
         spp_exr, spp_png = exr.with_name(f"{variant.name}_spp.exr"), exr.with_name(f"{variant.name}_spp.png")
@@ -219,18 +234,12 @@ class _SceneRun:
             return record
         options = RenderOptions(**{**self.options.to_dict(), "resolution": tuple(self.size)}).check()
         scene, progress = self.open_scene(), self.steps.sub(label, echo=f"{variant.kind}: ")
-        if variant.kind == "gold":
-            outcome = sr.render_gold(scene, options, progress=progress)
-        elif variant.kind == "selective":
-            director, _, seconds = self.director(variant)
-            outcome = sr.render_selective(scene, director, options, progress=progress,
-                                          mode=variant.name, map_seconds=seconds)
-        elif variant.kind == "uniform" and variant.spp_fraction is not None:
-            outcome = sr.render_uniform(scene, options, spp=variant.spp(options.max_spp), progress=progress)
-        elif variant.kind == "uniform":
-            outcome = sr.render_uniform(scene, options, seconds=inputs["budget_s"], progress=progress)
-        else:
-            outcome = sr.render_adaptive(scene, options, inputs["budget_s"], progress=progress)
+        director, map_seconds = None, 0.0
+        if variant.kind == "selective":
+            director, _, map_seconds = self.director(variant)
+        job = request_frame_job(self.request(variant, options, inputs), director_map=director,
+                                map_seconds=map_seconds, progress=progress)
+        outcome = run_steps(job(scene), progress).outcome
         self.warnings += outcome.warnings
         started = time.perf_counter()
         attributes = {"xsl_render:mode": variant.name, "xsl_render:max_spp": options.max_spp}

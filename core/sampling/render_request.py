@@ -52,6 +52,9 @@ class RenderRequest:
     budget_from, budget_mean_spp
         The stats file an equal-samples or equal-time budget was read from, and the mean
         samples it recorded (both recorded in the run's stats).
+    label
+        xs, xsl: the name the run's stats give its mode (the paper's validation names its
+        variants: ``x_only``, ``xsl_no_minbound``, ...); None: the mode.
     """
 
     mode: str
@@ -63,6 +66,7 @@ class RenderRequest:
     map_options: MapOptions | None = None
     budget_from: str | None = None
     budget_mean_spp: float | None = None
+    label: str | None = None
 
     def check(self) -> "RenderRequest":
         """Raise a SettingError naming the first setting the mode cannot take; return self."""

@@ -158,13 +158,15 @@ def _render_budget(stats: dict, path: str) -> float:
 def _request(args, options) -> tuple:
     """The ``RenderRequest`` of the command line (checked), and the director map file an
     xs or xsl render reads instead of computing its maps (None without --map/--maps)."""
+    from ...core.sampling.guided_plan import GuidedOptions
     from ...core.sampling.render_request import RenderRequest
 
     if args.mode == "guided":
         return RenderRequest("guided", options, guided=guided_options_from_args(args),
                              map_options=map_options_from_args(args)).check(), None
     if args.time_budget is not None:
-        raise InputError(f"--time-budget is for --mode guided (use --equal-time with --mode {args.mode})")
+        # Refused by the request itself ("is for --mode guided"), before anything is read.
+        RenderRequest(args.mode, options, guided=GuidedOptions(time_budget=args.time_budget)).check()
     stats = _read_budget(args.budget_from) if args.budget_from else None
     request = RenderRequest(args.mode, options, noise_threshold=args.noise_threshold)
     if args.mode in ("xs", "xsl"):
