@@ -74,7 +74,7 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
     outcome = render_guided(fog, RenderOptions(max_spp=64, resolution=(96, 54)),
                             GuidedOptions(time_budget=budget, tile_size=16, exponent=exponent))
     stats = outcome.stats
-    assert 0.9 * budget <= stats["wall_s"] <= 1.1 * budget
+    assert 0.85 * budget <= stats["wall_s"] <= 1.1 * budget     # early by 15 % at most (issue 20)
     assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
     assert outcome.samples.min() >= 1 and stats["pilot_spp"] >= 1
     if exponent == 0:

@@ -350,9 +350,15 @@ def budget_fog(blender, addon):
     return scene
 
 
+#: A guided render may finish this much early: the issue's "within 15 % of its time budget".
+#: On a 64x36 frame its last column is priced from two of a second each, and a faster last
+#: column leaves up to ~12 % unused (finishing early is never the user's loss).
+EARLY = 0.85
+
+
 def within_budget(stats: dict, budget: float = BUDGET) -> bool:
     return stats["mode"] == "guided" and stats["time_budget_s"] == budget \
-        and 0.9 * budget <= stats["wall_s"] <= 1.1 * budget
+        and EARLY * budget <= stats["wall_s"] <= 1.1 * budget
 
 
 def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, budget_fog, tmp_path):
@@ -377,7 +383,7 @@ def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, b
     out = tmp_path / "guided.exr"
     assert blender.ops.xsl.render_selective(filepath=str(out)) == {"FINISHED"}
     image = blender.data.images["XSL Render"]
-    assert image["mode"] == "guided" and 0.9 * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
+    assert image["mode"] == "guided" and EARLY * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
     assert out.is_file() and out.with_name("guided_spp.exr").is_file()
     report = blender.context.window_manager.xsl_render_status.last_report
     assert report.startswith(f"GUIDED {GUIDED_W}x{GUIDED_H}: mean ") and f"of a {BUDGET:g} s budget" in report
@@ -403,7 +409,7 @@ def test_guided_render_in_steps_keeps_its_budget_and_esc_restores(blender, budge
         ticks += 1
     assert answer == {"FINISHED"}, operator.reports
     image = blender.data.images["XSL Render"]
-    assert image["mode"] == "guided" and 0.9 * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
+    assert image["mode"] == "guided" and EARLY * BUDGET <= image["wall_s"] <= 1.1 * BUDGET
     assert ticks >= image["renders"] + 3               # map, sync, pilot, scoring, each rectangle
     assert settings_dump(budget_fog) == before
     cancel_midway(blender, budget_fog, before, "rectangle 2/", "Guided render")   # into the final pass
