@@ -201,12 +201,12 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
                 clock.resume(paused)
                 factor = pacer.scale(budget - clock.now() - denoise_reserve)
-                # Every pixel gets a sample, even when the clock is already out.
-                spp = max(1, min(int(round(rect.spp * factor)), guided.ceiling))
+                # Every pixel gets a sample, even when the clock is already out. A flat plan
+                # takes as many as fit, at a count Cycles' patterns stratify well.
+                wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
+                spp = max(1, min(wanted, guided.ceiling))
                 if final.flat:
-                    # Every pixel alike: as many as fit, at a count Cycles' patterns
-                    # stratify well.
-                    spp = sobol_friendly(max(1, min(int(rect.spp * factor), guided.ceiling)))
+                    spp = sobol_friendly(spp)
                 piece = renderer.render(rect.window, spp)
                 # (A scene sync Cycles did on the way is not what a sample costs.)
                 pacer.record(piece.seconds - piece.sync_seconds, rate * spp * rect.area)
