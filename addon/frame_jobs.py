@@ -22,6 +22,7 @@ from ..core.maps.options import MapOptions
 from ..core.progress import Steps, scaled_steps, timed_steps
 from ..core.sampling.guided_plan import GuidedOptions, SequenceBudget
 from ..core.sampling.render_options import RenderOptions
+from ..core.sampling.render_stats import FrameMaps
 from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
 from .maps.director_maps import map_steps, named_map_steps
@@ -132,7 +133,7 @@ def selective_frame(map_options: MapOptions, options: RenderOptions, mode: str,
     def render(scene, maps: MapSet) -> Steps[FrameResult]:
         outcome = yield from selective_steps(scene, maps.director(mode), options, label or mode,
                                              maps.info["seconds"]["total"])
-        outcome.stats["maps"] = maps_summary(maps)
+        outcome.stats.maps = maps_summary(maps)
         return FrameResult(scene.frame_current, outcome, maps)
 
     return FrameJob(render, prepare, MAP_SHARE)
@@ -171,8 +172,8 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
         outcome = yield from guided_steps(scene, options, frame_guided, importance, map_seconds,
                                           sync_outside=sequence is not None)
         if sequence is not None:
-            sequence.record(outcome.stats["wall_s"])
-            outcome.stats["sequence_budget"] = sequence.to_dict()
+            sequence.record(outcome.stats.wall_s)
+            outcome.stats.sequence_budget = sequence.to_dict()
         return FrameResult(scene.frame_current, outcome)
 
     if guided.importance == "none":
@@ -232,9 +233,9 @@ def stepped_render_frame(render_steps: Callable[[object], Steps[RenderOutcome]])
     return FrameJob(steps)
 
 
-def maps_summary(maps: MapSet) -> dict:
+def maps_summary(maps: MapSet) -> FrameMaps:
     """What a frame's statistics record about its maps: seconds and the ray cache."""
     cache = maps.info["x"]["cache"]
-    return {"frame": maps.info["frame"], "seconds": maps.info["seconds"],
-            "ray_cache_hit": bool(cache["hit"]), "ray_cache": cache["path"],
-            "warnings": maps.info["warnings"]}
+    return FrameMaps(frame=maps.info["frame"], seconds=maps.info["seconds"],
+                     ray_cache_hit=bool(cache["hit"]), ray_cache=cache["path"],
+                     warnings=maps.info["warnings"])

@@ -177,17 +177,28 @@ def _still_finish(scene, options, filepath: str, gold: bool):
     return finish
 
 
-def render_report(stats: dict) -> str:
-    width, height = stats["resolution"]
-    head = f"{stats['mode'].upper()} {width}x{height}: mean {stats['mean_spp']:.1f} spp"
-    if "time_budget_s" in stats and "guided" in stats:
-        importance = stats["guided"]["importance"]
+def render_report(stats) -> str:
+    """The status line of a panel render (``RenderStats``)."""
+    width, height = stats.resolution
+    head = f"{stats.mode.upper()} {width}x{height}: mean {stats.mean_spp:.1f} spp"
+    if stats.guided is not None:
+        importance = stats.guided.importance
         weighed = "" if importance == "none" else f", error weighed by {importance.upper()}"
-        return (f"{head} (ceiling {stats['max_spp']}{weighed}) in {stats['renders']} render(s), "
-                f"{stats['wall_s']:.1f} s of a {stats['time_budget_s']:g} s budget")
-    share = 100.0 * stats["total_samples"] / max(1, stats["gold_samples"])
-    return (f"{head} ({share:.0f}% of the gold standard's samples) in {stats['renders']} render(s), "
-            f"{stats['wall_s']:.1f} s")
+        return (f"{head} (ceiling {stats.max_spp}{weighed}) in {stats.renders} render(s), "
+                f"{stats.wall_s:.1f} s of a {stats.time_budget_s:g} s budget")
+    share = 100.0 * stats.total_samples / max(1, stats.gold_samples)
+    return (f"{head} ({share:.0f}% of the gold standard's samples) in {stats.renders} render(s), "
+            f"{stats.wall_s:.1f} s")
+
+
+@dataclass(frozen=True)
+class PanelFrame:
+    """One frame of the panel's animation render, as written."""
+
+    frame: int
+    path: str
+    stats: object                           # its ``RenderStats``
+    warnings: list[str]
 
 
 def animation_frames(scene) -> range:
@@ -218,7 +229,7 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
     for name, data in names:
         ensure_image(name, width, height, data)
 
-    def on_frame(result) -> dict:
+    def on_frame(result) -> PanelFrame:
         path = frame_path(pattern, result.frame)
         outcome = result.outcome
         write_render_outputs(path, outcome.image, outcome.samples, outcome.stats,
@@ -226,21 +237,18 @@ def _animation_job(scene, label: str, frame_job, options, filepath: str, gold: b
         show_render(outcome, options.max_spp, gold=gold)
         if result.maps is not None:
             show_maps(result.maps)
-        maps = outcome.stats.get("maps", {})
-        return {"frame": result.frame, "path": path, "mean_spp": outcome.stats["mean_spp"],
-                "wall_s": outcome.stats["wall_s"], "time_budget_s": outcome.stats.get("time_budget_s"),
-                "sequence_budget": outcome.stats.get("sequence_budget"),
-                "ray_cache_hit": maps.get("ray_cache_hit"), "warnings": list(outcome.warnings)
-                + list(maps.get("warnings", []))}
+        maps = outcome.stats.maps
+        return PanelFrame(result.frame, path, outcome.stats,
+                          list(outcome.warnings) + (list(maps.warnings) if maps is not None else []))
 
-    def finish(done: list) -> JobResult:
-        hits = [entry["ray_cache_hit"] for entry in done if entry["ray_cache_hit"] is not None]
+    def finish(done: list[PanelFrame]) -> JobResult:
+        hits = [entry.stats.maps.ray_cache_hit for entry in done if entry.stats.maps is not None]
         report = (f"{label}: {len(done)} frame(s) {frames.start}..{frames.stop - 1} -> "
-                  f"{Path(done[0]['path']).parent if done else pattern}")
+                  f"{Path(done[0].path).parent if done else pattern}")
         if hits:
             report += f"; camera rays cast {hits.count(False)}x, reused {hits.count(True)}x"
         image = bpy.data.images.get(GOLD_IMAGE if gold else RENDER_IMAGE)
-        warnings = list(dict.fromkeys(w for entry in done for w in entry["warnings"]))
+        warnings = list(dict.fromkeys(w for entry in done for w in entry.warnings))
         return JobResult(report, image, warnings)
 
     return Job(f"{label} (animation)", frames_steps(scene, frames, frame_job, on_frame), finish)

@@ -34,7 +34,7 @@ def test_denoising_takes_most_of_the_noise_away_and_leaves_nothing_behind(blende
     raw = render(fog, 4, denoise=False)
     denoised = render(fog, 4)
     assert error(denoised.image, reference) < 0.5 * error(raw.image, reference)
-    assert denoised.stats["phases_s"]["denoise"] > 0 and denoised.stats["options"]["denoise"]
+    assert denoised.stats.phases_s["denoise"] > 0 and denoised.stats.options["denoise"]
     np.testing.assert_array_equal(denoised.image[..., 3], raw.image[..., 3])      # alpha as rendered
     assert settings_dump(fog) == before
     assert counts == {name: len(getattr(blender.data, name)) for name in counts}

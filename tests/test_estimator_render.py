@@ -46,7 +46,7 @@ def test_each_estimator_reaches_cycles_and_the_scene_gets_its_settings_back(
     options = RenderOptions(max_spp=2, estimator=estimator, step_rate=rate).check()
     outcome = sr.render_uniform(scene, options, spp=1)
     assert seen and all(s == (biased, pytest.approx(step)) for s in seen)
-    assert outcome.stats["estimator"]["estimator"] == estimator
+    assert outcome.stats.estimator["estimator"] == estimator
     assert settings_dump(scene) == before
 
     with pytest.raises(Cancelled):                                              # cancel

@@ -28,6 +28,7 @@ from support.fog_scene import build_fog_scene
 from xsl_render.core.errors import InputError
 from xsl_render.core.imageio import write_exr, write_png
 from xsl_render.core.sampling.render_files import write_render_outputs
+from xsl_render.core.sampling.render_stats import RenderStats
 from xsl_render.operators.cli import main
 
 EXE = Path(sys.executable).with_name("xsl-render")
@@ -112,7 +113,9 @@ def test_a_full_disk_while_stats_are_written_leaves_no_file_of_the_render(tmp_pa
     """render-stats-disk-full: the set (image, _spp files, --stats) appears whole or not at all."""
     monkeypatch.setattr(Path, "write_text", _failing_write_text(errno.ENOSPC))
     image, samples = np.ones((8, 8, 4), np.float32), np.full((8, 8), 4.0, np.float32)
-    stats = {"mode": "gold", "mean_spp": 4.0, "phases_s": {"render": 1.0}}
+    stats = RenderStats(mode="gold", scene="Scene", resolution=(8, 8), max_spp=4, seed=0,
+                        phases_s={"renders": 1.0}, total_samples=256, mean_spp=4.0, gold_samples=256,
+                        renders=1, tiles=[], options={}, estimator={})
     with pytest.raises(InputError, match=r"cannot write .*s\.json: no space left on device"):
         write_render_outputs(tmp_path / "o.exr", image, samples, stats, 4, 0, tmp_path / "s.json")
     assert tree(tmp_path) == {}

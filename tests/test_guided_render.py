@@ -74,14 +74,14 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
     outcome = render_guided(fog, RenderOptions(max_spp=64, resolution=(96, 54)),
                             GuidedOptions(time_budget=budget, tile_size=16, exponent=exponent))
     stats = outcome.stats
-    assert 0.85 * budget <= stats["wall_s"] <= 1.1 * budget     # early by 15 % at most (issue 20)
-    assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
-    assert outcome.samples.min() >= 1 and stats["pilot_spp"] >= 1
+    assert 0.85 * budget <= stats.wall_s <= 1.1 * budget     # early by 15 % at most (issue 20)
+    assert stats.wall_s == pytest.approx(sum(stats.phases_s.values()))
+    assert outcome.samples.min() >= 1 and stats.pilot_spp >= 1
     if exponent == 0:
         # Nothing to score: the plan is flat, three columns of the frame (the later paced).
-        assert stats["final_pass"]["flat"] and stats["final_pass"]["renders"] == 3
+        assert stats.final_pass["flat"] and stats.final_pass["renders"] == 3
     else:
-        assert stats["final_pass"]["renders"] >= 2
+        assert stats.final_pass["renders"] >= 2
         assert outcome.samples.max() > outcome.samples.min()    # the samples went somewhere
     assert np.isfinite(outcome.image).all() and outcome.image.shape == (54, 96, 4)
 
@@ -90,7 +90,7 @@ def test_guided_render_obeys_its_ceiling_and_restores_the_scene(fog):
     before = settings_dump(fog)
     outcome = render_guided(fog, RenderOptions(max_spp=8), GuidedOptions(time_budget=6.0, max_spp=8))
     assert outcome.samples.max() <= 8
-    assert outcome.stats["wall_s"] < 6.0                    # done when every pixel has its 8
+    assert outcome.stats.wall_s < 6.0                    # done when every pixel has its 8
     assert settings_dump(fog) == before
 
 
@@ -114,6 +114,6 @@ def test_guided_render_syncs_heterogeneous_fog_once(blender):
         first_sync = time.perf_counter() - started
     outcome = render_guided(scene, options, GuidedOptions(time_budget=max(2.0, 2.5 * first_sync),
                                                           max_spp=16, tile_size=8).check())
-    final = [tile["seconds"] for tile in outcome.stats["tiles"] if tile.get("pass") == "final"]
-    assert final and outcome.stats["phases_s"]["sync"] > 0.3 * first_sync
-    assert max(final) < 0.3 * outcome.stats["phases_s"]["sync"], (final, outcome.stats["phases_s"])
+    final = [tile["seconds"] for tile in outcome.stats.tiles if tile.get("pass") == "final"]
+    assert final and outcome.stats.phases_s["sync"] > 0.3 * first_sync
+    assert max(final) < 0.3 * outcome.stats.phases_s["sync"], (final, outcome.stats.phases_s)

@@ -161,9 +161,9 @@ def test_gold_in_bands_is_bit_identical_to_one_render(fog):
     options = RenderOptions(max_spp=4, seed=3)
     steps = []
     banded = run_steps(gold_band_steps(fog, options, budget=1), lambda f, m: steps.append(m))
-    assert banded.stats["bands"]["count"] == 2 and banded.stats["renders"] == 2
+    assert banded.stats.bands["count"] == 2 and banded.stats.renders == 2
     np.testing.assert_array_equal(banded.image, render_gold(fog, options).image)
-    assert banded.stats["total_samples"] == W * H * 4
+    assert banded.stats.total_samples == W * H * 4
 
 
 class FakeWindowManager:
@@ -356,9 +356,9 @@ def budget_fog(blender, addon):
 EARLY = 0.85
 
 
-def within_budget(stats: dict, budget: float = BUDGET) -> bool:
-    return stats["mode"] == "guided" and stats["time_budget_s"] == budget \
-        and EARLY * budget <= stats["wall_s"] <= 1.1 * budget
+def within_budget(stats, budget: float = BUDGET) -> bool:
+    return stats.mode == "guided" and stats.time_budget_s == budget \
+        and EARLY * budget <= stats.wall_s <= 1.1 * budget
 
 
 def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, budget_fog, tmp_path):
@@ -373,10 +373,10 @@ def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, b
     messages = []
     result = run_steps(job.steps, lambda fraction, message: messages.append(message))
     stats = result.outcome.stats
-    assert within_budget(stats), stats["phases_s"]
-    assert stats["guided"]["importance"] == "xs" and stats["phases_s"]["maps"] > 0.0
+    assert within_budget(stats), stats.phases_s
+    assert stats.guided.importance == "xs" and stats.phases_s["maps"] > 0.0
     assert any(message.startswith("XS map: ") for message in messages)
-    assert stats["max_spp"] == 4096 and result.outcome.samples.min() >= 1
+    assert stats.max_spp == 4096 and result.outcome.samples.min() >= 1
     assert settings_dump(budget_fog) == before
 
     # The operator shows it and writes the files of `xsl-render render --mode guided`.
@@ -427,16 +427,16 @@ def test_guided_animation_shares_its_time_between_frames(blender, budget_fog, tm
     budget_fog.frame_start, budget_fog.frame_end = 1, 2
     job = selective_job(budget_fog, animation=True, filepath=str(tmp_path / "f_####.exr"))
     done = run_steps(job.steps)
-    assert [entry["frame"] for entry in done] == [1, 2]
-    assert done[0]["time_budget_s"] == budget                    # the first frame: the budget
+    assert [entry.frame for entry in done] == [1, 2]
+    assert done[0].stats.time_budget_s == budget                 # the first frame: the budget
     # The second: what the range has left (more than the budget when the first frame finished
     # early, as on a fast machine whose scene sync is short), never less than half of it.
-    left = 2 * budget - done[0]["sequence_budget"]["spent"]
-    assert done[1]["time_budget_s"] == pytest.approx(max(0.5 * budget, left), rel=1e-9)
-    total = sum(entry["wall_s"] for entry in done)
+    left = 2 * budget - done[0].stats.sequence_budget["spent"]
+    assert done[1].stats.time_budget_s == pytest.approx(max(0.5 * budget, left), rel=1e-9)
+    total = sum(entry.stats.wall_s for entry in done)
     assert 0.9 * 2 * budget <= total <= 1.1 * 2 * budget, done
     for entry in done:
-        assert oiio.ImageBuf(entry["path"]).spec().getattribute("xsl_render:mode") == "guided"
+        assert oiio.ImageBuf(entry.path).spec().getattribute("xsl_render:mode") == "guided"
     assert job.finish(done).report.startswith("Guided render: 2 frame(s) 1..2")
 
 

@@ -22,7 +22,7 @@ from xsl_render.core.imageio import image_attributes, read_image, write_exr
 from xsl_render.core.validation.reference import (MIN_REFERENCE_SPP, REFERENCE_SEED, ReferenceInputs,
                                                   cache_root, check_contestant_seeds,
                                                   default_reference_spp, find_reference,
-                                                  read_reference, shipped_folders, write_reference)
+                                                  read_reference, shipped_folders, write_reference, ReferenceRun)
 
 W, H = 32, 18
 SHIPPED = EXAMPLES / "references"
@@ -65,7 +65,7 @@ def test_an_entry_is_a_hit_only_when_whole(tmp_path):
     environ = {"XSL_RENDER_CACHE": str(tmp_path)}
     folder = tmp_path / "references"
     image = np.full((H, W, 4), 0.5, np.float32)
-    entry = write_reference(folder, INPUTS, image, {"wall_s": 1.0})
+    entry = write_reference(folder, INPUTS, image, ReferenceRun({"wall_s": 1.0}, 2.0))
     assert sorted(p.name for p in folder.iterdir()) == [f"{INPUTS.key}.exr", f"{INPUTS.key}.json"]
     found = find_reference(INPUTS.key, environ)
     assert found.source == "cache" and found.path == entry.path
@@ -79,11 +79,11 @@ def test_an_entry_is_a_hit_only_when_whole(tmp_path):
     (folder / f"{INPUTS.key}.json").unlink()
     assert find_reference(INPUTS.key, environ) is None
     # ... nor a record whose image is gone, nor one made for other inputs.
-    write_reference(folder, INPUTS, image, {})
+    write_reference(folder, INPUTS, image, ReferenceRun({}))
     entry.path.unlink()
     assert find_reference(INPUTS.key, environ) is None
     other = ReferenceInputs(**{**INPUTS.__dict__, "spp": 128})
-    write_reference(folder, other, image, {})
+    write_reference(folder, other, image, ReferenceRun({}))
     (folder / f"{other.key}.json").rename(folder / f"{INPUTS.key}.json")
     write_exr(folder / f"{INPUTS.key}.exr", image)
     assert find_reference(INPUTS.key, environ) is None

@@ -2,6 +2,8 @@
 its errors naming settings (the command line words them as its flags)."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 from support.cli_wording import refused_in_flags
 
@@ -57,5 +59,8 @@ def test_impossible_requests_are_refused_naming_the_setting(request_, message):
 
 def test_the_budget_source_is_recorded():
     request = RenderRequest("uniform", OPTIONS, spp=12, budget_from="run.json", budget_mean_spp=11.6)
-    assert request.budget_stats() == {"budget_from": "run.json", "budget_mean_spp": 11.6}
-    assert RenderRequest("gold", OPTIONS).budget_stats() == {}
+    stats = SimpleNamespace(budget_from=None, budget_mean_spp=None)
+    request.record_budget(stats)
+    assert (stats.budget_from, stats.budget_mean_spp) == ("run.json", 11.6)
+    RenderRequest("gold", OPTIONS).record_budget(stats)
+    assert (stats.budget_from, stats.budget_mean_spp) == (None, None)

@@ -53,7 +53,7 @@ def test_tiles_are_bit_identical_to_full_frames_with_the_exact_margin(fog):
     looks 2 x 5 px around a pixel; the margin covers it.)"""
     options = RenderOptions(max_spp=8, tile_size=16, margin=EXACT_MARGIN, seed=2, denoise=False)
     outcome = sr.render_selective(fog, checker_map(0.25, 0.75), options)
-    assert len(outcome.stats["tiles"]) == 24
+    assert len(outcome.stats.tiles) == 24
     for spp in (2, 6):
         where = outcome.samples == spp
         assert where.sum() > 1000
@@ -75,7 +75,7 @@ def test_default_tiles_are_unbiased_at_their_edges(fog):
     """Margin 0 with guided volumes: near tile edges the paths differ from a full-frame render
     (guidance sees fewer neighbours), but only as noise: no step in brightness at the edges."""
     grid = sr.render_selective(fog, checker_map(0.5, 0.625), RenderOptions(max_spp=8, tile_size=16, denoise=False))
-    assert len(grid.stats["tiles"]) == 24 and set(np.unique(grid.samples)) == {4, 5}
+    assert len(grid.stats.tiles) == 24 and set(np.unique(grid.samples)) == {4, 5}
     rows, cols = np.mgrid[0:H, 0:W]
     edge = np.minimum(np.minimum(rows % 16, 15 - rows % 16), np.minimum(cols % 16, 15 - cols % 16)) < 5
     for spp in (4, 5):
@@ -96,7 +96,7 @@ def test_gold_is_a_plain_cycles_render(fog):
         fog.cycles.use_denoising = False
         plain = render_passes(fog)["Combined"]
     np.testing.assert_array_equal(gold.image, plain)
-    assert gold.stats["total_samples"] == W * H * 4 and gold.stats["renders"] == 1
+    assert gold.stats.total_samples == W * H * 4 and gold.stats.renders == 1
     np.testing.assert_array_equal(gold.samples, 4)
 
 
@@ -169,23 +169,23 @@ def test_scene_without_camera(fog):
 def test_uniform_and_adaptive_stop_at_the_time_budget(fog):
     options = RenderOptions(max_spp=4096, resolution=(48, 27))
     uniform = sr.render_uniform(fog, options, seconds=0.6)
-    assert uniform.stats["stopped_by_time"]
-    count = uniform.stats["tiles"][0]["samples_rendered"]
+    assert uniform.stats.stopped_by_time
+    count = uniform.stats.tiles[0]["samples_rendered"]
     assert 1 <= count < 4096
     np.testing.assert_array_equal(uniform.samples, count)
-    assert 0.4 < uniform.stats["wall_s"] < 2.0
+    assert 0.4 < uniform.stats.wall_s < 2.0
     adaptive = sr.render_adaptive(fog, options, 1.5, noise_threshold=0.05)
     counts = adaptive.samples
-    assert counts.min() >= 1 and counts.max() <= adaptive.stats["tiles"][0]["samples_rendered"]
+    assert counts.min() >= 1 and counts.max() <= adaptive.stats.tiles[0]["samples_rendered"]
     assert counts.min() < counts.max()                # Cycles spent its samples unevenly
-    assert adaptive.stats["wall_s"] < 3.0             # (less than 1.5 s if every pixel converged)
+    assert adaptive.stats.wall_s < 3.0             # (less than 1.5 s if every pixel converged)
 
 
 def test_adaptive_sampling_inside_rectangles(fog):
     options = RenderOptions(max_spp=256, tile_size=16, adaptive_threshold=0.05, resolution=(48, 27))
     outcome = sr.render_selective(fog, radial_map(48, 27, 0.4), options)
     planned = np.zeros((27, 48))
-    for tile in outcome.stats["tiles"]:
+    for tile in outcome.stats.tiles:
         planned[tile["row0"]:tile["row1"], tile["col0"]:tile["col1"]] = tile["spp"]
     assert (outcome.samples <= planned).all() and (outcome.samples >= 1).all()
     assert (outcome.samples < planned).any()
@@ -222,6 +222,6 @@ def test_equal_time_baselines_sync_a_volume_scene_once(blender, mode):
         outcome = sr.render_uniform(scene, options, seconds=budget)
     else:
         outcome = sr.render_adaptive(scene, options, budget)
-    sync = outcome.stats["time_budget_s"] - outcome.stats["time_limit_s"]
+    sync = outcome.stats.time_budget_s - outcome.stats.time_limit_s
     assert sync > 1.0, "the scene was expected to cost more than a second to sync"
-    assert outcome.stats["phases_s"]["renders"] < outcome.stats["time_budget_s"] + 0.5 * sync
+    assert outcome.stats.phases_s["renders"] < outcome.stats.time_budget_s + 0.5 * sync

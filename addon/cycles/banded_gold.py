@@ -59,9 +59,9 @@ def gold_band_steps(scene, options: RenderOptions, budget: int = BAND_PIXEL_SAMP
         phases = {"maps": 0.0, "renders": time.perf_counter() - started - waited}
         image, samples = compositor.result()
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
-        stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings)
-    stats["cycles_sync_s"] = renderer.sync_seconds
-    stats["bands"] = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,
+        stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings,
+                             renderer.sync_seconds)
+    stats.bands = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,
                       "note": "bit-identical to one full-frame render; the wall time includes "
                               "the margin rows"}
     yield 1.0, "gold: done"

@@ -223,18 +223,14 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings)
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
-    stats["wall_s"] = sum(phases.values())
     if sync_outside:
-        stats["sync_outside_budget_s"] = phases["sync"]
-    stats.update(time_budget_s=guided.time_budget, guided=guided.to_dict(), pilot_spp=have,
-                 pilot_seconds=pilot.seconds, pilot_resolution_divisor=reduce,
-                 seconds_per_pixel_sample=rate,
-                 final_pass=final.to_dict(),
-                 denoise_reserved_s=denoise_reserve, cycles_sync_s=renderer.sync_seconds)
-    if stats["wall_s"] > 1.1 * budget:
-        note = (f"the render took {stats['wall_s']:.2f} s of a {budget:g} s budget "
-                f"(scene sync {phases['sync']:.2f} s, pilot {phases['pilot']:.2f} s at {have} spp)")
-        warnings.append(note)
-        stats["warnings"] = warnings
+        stats.sync_outside_budget_s = phases["sync"]
+    stats.time_budget_s, stats.guided = guided.time_budget, guided
+    stats.pilot_spp, stats.pilot_seconds, stats.pilot_resolution_divisor = have, pilot.seconds, reduce
+    stats.seconds_per_pixel_sample, stats.final_pass = rate, final.to_dict()
+    stats.denoise_reserved_s, stats.cycles_sync_s = denoise_reserve, renderer.sync_seconds
+    if stats.wall_s > 1.1 * budget:
+        warnings.append(f"the render took {stats.wall_s:.2f} s of a {budget:g} s budget "
+                        f"(scene sync {phases['sync']:.2f} s, pilot {phases['pilot']:.2f} s at {have} spp)")
     yield 1.0, "guided: done"
     return RenderOutcome(merged, samples, stats, warnings)

@@ -28,6 +28,7 @@ from ...core.errors import InputError, SettingError
 from ...core.progress import Progress, ProgressCallback, Steps, TileProgress, run_steps
 from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
 from ..scene.probe import camera_model, render_size
 from ..scene.state import preserved_scene
@@ -46,7 +47,7 @@ class RenderOutcome:
 
     image: np.ndarray                       # (H, W, 4) float32 RGBA, row 0 at the top
     samples: np.ndarray                     # (H, W) float32 samples per pixel
-    stats: dict
+    stats: RenderStats
     warnings: list[str] = field(default_factory=list)
 
 
@@ -79,29 +80,21 @@ def apply_estimator(scene, choice) -> None:
 
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
-           samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str]) -> dict:
+                 samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str],
+                 cycles_sync_s: float | None = None) -> RenderStats:
+    """What every mode records (``phases`` is kept, not copied: later phases add to it)."""
     total = float(samples.sum(dtype=np.float64))
     estimator = options.volume_estimator()
     if estimator.seconds:
         # Auto's prediction is part of the run (a phase, counted in its time).
         phases.setdefault("estimator", estimator.seconds)
-    return {
-        "mode": mode,
-        "scene": scene.name,
-        "resolution": [width, height],
-        "max_spp": options.max_spp,
-        "seed": options.seed,
-        "wall_s": sum(phases.values()),
-        "phases_s": phases,
-        "total_samples": int(round(total)),
-        "mean_spp": total / (width * height),
-        "gold_samples": width * height * options.max_spp,
-        "renders": len(tiles),
-        "tiles": tiles,
-        "options": options.to_dict(),
-        "estimator": estimator.to_dict() | {"described": estimator.describe()},
-        "warnings": warnings,
-    }
+    return RenderStats(
+        mode=mode, scene=scene.name, resolution=(width, height), max_spp=options.max_spp,
+        seed=options.seed, phases_s=phases, total_samples=int(round(total)),
+        mean_spp=total / (width * height), gold_samples=width * height * options.max_spp,
+        renders=len(tiles), tiles=tiles, options=options.to_dict(),
+        estimator=estimator.to_dict() | {"described": estimator.describe()}, warnings=warnings,
+        cycles_sync_s=cycles_sync_s)
 
 
 def tile_entry(window, rendered) -> dict:
@@ -212,17 +205,16 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
         image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
-        stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings)
-    stats["cycles_sync_s"] = renderer.sync_seconds
-    stats["plan"] = plan.to_dict()
-    stats["ideal_speedup"] = plan.ideal_speedup
-    stats["director_map_mean"] = float(data.mean())
+        stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings,
+                             renderer.sync_seconds)
+    stats.plan, stats.ideal_speedup = plan.to_dict(), plan.ideal_speedup
+    stats.director_map_mean = float(data.mean())
     return RenderOutcome(image, samples, stats, warnings)
 
 
 def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressCallback | None,
                    samples: int, time_budget: float | None = None,
-                   adaptive_threshold: float | None = None, extra: dict | None = None) -> RenderOutcome:
+                   adaptive_threshold: float | None = None, budget: str | None = None) -> RenderOutcome:
     """One ordinary Cycles render of the whole frame (optionally time-limited)."""
     report = Progress(progress)
     with preserved_scene(scene):
@@ -255,15 +247,15 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
         image = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
-        stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings)
-    stats["cycles_sync_s"] = renderer.sync_seconds
-    stats.update(extra or {})
+        stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings,
+                             renderer.sync_seconds)
+    stats.budget, stats.noise_threshold = budget, adaptive_threshold
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not
         # adaptive sampling finding every pixel converged).
-        stats.update(time_budget_s=time_budget, time_limit_s=time_limit,
-                     stopped_by_time=rendered.samples_rendered < samples
-                     and rendered.seconds >= 0.9 * time_limit)
+        stats.time_budget_s, stats.time_limit_s = time_budget, time_limit
+        stats.stopped_by_time = (rendered.samples_rendered < samples
+                                 and rendered.seconds >= 0.9 * time_limit)
     return RenderOutcome(image, per_pixel, stats, warnings)
 
 
@@ -281,11 +273,11 @@ def render_uniform(scene, options: RenderOptions, spp: int | None = None, second
     if spp is not None:
         if spp < 1:
             raise InputError(f"uniform samples per pixel must be at least 1 (got {spp})")
-        return _single_render(scene, options, "uniform", progress, spp, extra={"budget": "samples"})
+        return _single_render(scene, options, "uniform", progress, spp, budget="samples")
     if not seconds > 0:
         raise InputError(f"the time budget must be positive (got {seconds})")
     return _single_render(scene, options, "uniform", progress, options.max_spp, time_budget=seconds,
-                          extra={"budget": "time"})
+                          budget="time")
 
 
 def render_adaptive(scene, options: RenderOptions, seconds: float | None,
@@ -310,5 +302,4 @@ def render_adaptive(scene, options: RenderOptions, seconds: float | None,
                            noise_threshold=noise_threshold)
     return _single_render(scene, options, "adaptive", progress, options.max_spp, time_budget=seconds,
                           adaptive_threshold=noise_threshold,
-                          extra={"budget": "samples" if seconds is None else "time",
-                                 "noise_threshold": noise_threshold})
+                          budget="samples" if seconds is None else "time")

@@ -37,7 +37,7 @@ from typing import Callable, Sequence
 from ...core.errors import InputError
 from ...core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
                                scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
-from ...core.farm.frame_outputs import guided_frame_record, valid_frame_outputs, write_frame_outputs
+from ...core.farm.frame_outputs import FrameSummary, guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ...core.farm.task_groups import plan_group
 from ...core.files import atomic_path, json_digest
 from ...core.maps.camera_rays import CACHE_NAME
@@ -290,15 +290,16 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
         def on_frame(result) -> None:
             files = FrameFiles(Path(output), result.frame)
             outcome = result.outcome
-            stats = guided_frame_record(inputs[result.frame], {
-                **outcome.stats, "frame": result.frame, "file": str(scene_path),
-                "out": str(files.image), "task": _task_record(frames)})
+            frame_stats = outcome.stats
+            frame_stats.frame, frame_stats.file, frame_stats.out = result.frame, str(scene_path), str(files.image)
+            stats = guided_frame_record(inputs[result.frame],
+                                        {**frame_stats.to_json(), "task": _task_record(frames)})
             scale = preview_scale(guided.max_spp, outcome.samples)
-            attributes = frame_attributes(stats["mode"], scale, options.seed, stats["mean_spp"])
+            attributes = frame_attributes(frame_stats.mode, scale, options.seed, frame_stats.mean_spp)
             write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
             outcomes[result.frame] = TaskOutcome(result.frame, 1, done_now=[files.stem],
                                                  warnings=list(outcome.warnings),
-                                                 seconds=stats["wall_s"], stats=stats)
+                                                 seconds=FrameSummary.from_record(stats).wall_s, stats=stats)
 
         scene = _open(scene_path, scene_name, todo[0], device)
         sequence = SequenceBudget(guided.time_budget, len(todo))

@@ -101,9 +101,8 @@ def show_render(outcome, max_spp: int, gold: bool = False) -> tuple:
     """A RenderOutcome as the render image and its samples image (spp / max_spp: 1 = the
     ceiling; the counts themselves are in the custom property ``max_spp`` times it)."""
     stats = outcome.stats
-    info = {"mode": stats["mode"], "mean_spp": float(stats["mean_spp"]),
-            "total_samples": int(stats["total_samples"]), "renders": int(stats["renders"]),
-            "wall_s": float(stats["wall_s"]), "max_spp": int(max_spp)}
+    info = {"mode": stats.mode, "mean_spp": float(stats.mean_spp), "total_samples": int(stats.total_samples),
+            "renders": int(stats.renders), "wall_s": float(stats.wall_s), "max_spp": int(max_spp)}
     names = (GOLD_IMAGE, GOLD_SAMPLES_IMAGE) if gold else (RENDER_IMAGE, SAMPLES_IMAGE)
     return (show(names[0], outcome.image, data=False, info=info),
             show(names[1], outcome.samples / float(max_spp), data=True, info=info))

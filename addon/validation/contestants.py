@@ -152,7 +152,7 @@ def run_contestant(scene, contestant: Contestant, options: RenderOptions, budget
         job = request_frame_job(request, progress=progress)
         outcome = run_steps(job(scene), progress).outcome
         if setup is not None:
-            outcome.stats["path_guiding"] = _guiding_settings(scene)
+            outcome.stats.path_guiding = _guiding_settings(scene)
     seconds = time.perf_counter() - started
     outcome.warnings += [str(w.message) for w in caught]
     return outcome, seconds
@@ -179,7 +179,7 @@ def run_contestant_frames(scene, contestant: Contestant, options: RenderOptions,
         began = time.perf_counter()
         try:
             if setup is not None:
-                result.outcome.stats["path_guiding"] = _guiding_settings(scene)
+                result.outcome.stats.path_guiding = _guiding_settings(scene)
             return result if on_frame is None else on_frame(result)
         finally:
             outside[0] += time.perf_counter() - began

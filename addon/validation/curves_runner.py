@@ -284,8 +284,8 @@ class CurvesJob:
             self.warnings += outcome.warnings + [str(w.message) for w in caught]
             write_exr(exr, outcome.image, ["R", "G", "B", "A"],
                       attributes={"xsl_render:contestant": contestant.name, "xsl_render:seed": seed})
-            stats = {key: outcome.stats[key] for key in STATS_KEPT if key in outcome.stats}
-            record = {"inputs": inputs, "input_hash": digest, "seconds": seconds, "stats": stats,
+            record = {"inputs": inputs, "input_hash": digest, "seconds": seconds,
+                      "stats": outcome.stats.to_json(keep=STATS_KEPT),
                       "file": exr.relative_to(self.out_dir).as_posix()}
             write_record(record_path, record)
             self.counts["rendered"] += 1
@@ -314,6 +314,7 @@ class CurvesJob:
             warm_up(self.scene)
             self.warm = True
         options = RenderOptions(max_spp=self.ceiling, seed=seed, resolution=self.size).check()
+        every = []
 
         def on_frame(result) -> dict:
             outcome = result.outcome
@@ -322,23 +323,22 @@ class CurvesJob:
                       attributes={"xsl_render:contestant": contestant.name, "xsl_render:seed": seed,
                                   "xsl_render:frame": result.frame})
             self.warnings.extend(f"frame {result.frame}: {w}" for w in outcome.warnings)
-            stats = {key: outcome.stats[key] for key in FRAME_STATS_KEPT if key in outcome.stats}
-            return {"frame": result.frame, "file": path.relative_to(self.out_dir).as_posix(), "stats": stats}
+            every.append(outcome.stats)
+            return {"frame": result.frame, "file": path.relative_to(self.out_dir).as_posix(),
+                    "stats": outcome.stats.to_json(keep=FRAME_STATS_KEPT)}
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             frames, seconds = run_contestant_frames(self.scene, contestant, options, self.frames, budget_s,
                                                     on_frame, progress=steps.sub(label))
         self.warnings += [str(w.message) for w in caught]
-        every = [frame["stats"] for frame in frames]
-        spp = [s["mean_spp"] for s in every if s.get("mean_spp") is not None]
-        stats = {"mode": every[0].get("mode"), "frames": len(frames),
-                 "mean_spp": float(np.mean(spp)) if spp else None,
-                 "total_samples": sum(s.get("total_samples", 0) for s in every),
-                 "cycles_sync_s": sum(s.get("cycles_sync_s", 0.0) for s in every),
-                 "frame_wall_s": sum(s.get("wall_s", 0.0) for s in every)}
-        if "path_guiding" in every[0]:
-            stats["path_guiding"] = dict(every[0]["path_guiding"])
+        stats = {"mode": every[0].mode, "frames": len(frames),
+                 "mean_spp": float(np.mean([s.mean_spp for s in every])),
+                 "total_samples": sum(s.total_samples for s in every),
+                 "cycles_sync_s": sum(s.cycles_sync_s or 0.0 for s in every),
+                 "frame_wall_s": sum(s.wall_s for s in every)}
+        if every[0].path_guiding is not None:
+            stats.update(path_guiding=dict(every[0].path_guiding))
         record = {"inputs": inputs, "input_hash": digest, "seconds": seconds, "stats": stats,
                   "file": folder.relative_to(self.out_dir).as_posix(), "frames": frames}
         write_record(record_path, record)
@@ -432,19 +432,19 @@ class CurvesJob:
         return build_curves(header, CURVES, runs, metrics)
 
     def repeat_entry(self, record: dict) -> dict:
-        stats = record["stats"]
+        recorded = record["stats"]          # the run record's copy of its stats (STATS_KEPT)
         if self.frames is not None:
             frames = [{"frame": entry["frame"], "file": entry["file"], "seconds": entry["stats"].get("wall_s"),
                        "mean_spp": entry["stats"].get("mean_spp"),
                        **{figure: entry.get(figure) for figure in FRAME_FIGURES}, "stats": entry["stats"]}
                       for entry in record["frames"]]
             return {"seed": record["inputs"]["seed"], "seconds": record["seconds"],
-                    "mean_spp": stats.get("mean_spp"), **sequence_values(record["sequence"]),
-                    "file": record["file"], "reused": record["reused"], "stats": stats,
+                    "mean_spp": recorded.get("mean_spp"), **sequence_values(record["sequence"]),
+                    "file": record["file"], "reused": record["reused"], "stats": recorded,
                     "frames": frames}
         return {"seed": record["inputs"]["seed"], "seconds": record["seconds"],
-                "mean_spp": stats.get("mean_spp"), **metric_values(record["metrics"]),
-                "file": record["file"], "reused": record["reused"], "stats": stats}
+                "mean_spp": recorded.get("mean_spp"), **metric_values(record["metrics"]),
+                "file": record["file"], "reused": record["reused"], "stats": recorded}
 
     def check_guiding(self, runs: dict[str, dict]) -> None:
         """Say, per path-guiding repeat, whether Cycles used guiding: its image differs from

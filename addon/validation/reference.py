@@ -25,7 +25,7 @@ from typing import Callable, Sequence
 from ...core.files import file_sha256
 from ...core.progress import ProgressCallback, WeightedSteps
 from ...core.sampling.render_options import RenderOptions
-from ...core.validation.reference import (REFERENCE_SEED, CachedReference, ReferenceInputs,
+from ...core.validation.reference import (REFERENCE_SEED, CachedReference, ReferenceInputs, ReferenceRun,
                                           check_reference_options, default_reference_spp,
                                           find_reference, user_folder, write_reference)
 from ...core.validation.store import check_output_folder
@@ -81,12 +81,11 @@ class Reference:
     path: Path
     inputs: ReferenceInputs
     source: str             # "shipped", "cache" or "rendered"
-    stats: dict
+    run: ReferenceRun
 
     def to_dict(self) -> dict:
         return {"path": str(self.path), "key": self.inputs.key, "source": self.source,
-                "inputs": self.inputs.to_dict(),
-                "render_s": self.stats.get("reference_wall_s")}
+                "inputs": self.inputs.to_dict(), "render_s": self.run.seconds}
 
 
 def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback | None = None,
@@ -100,9 +99,9 @@ def ensure_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback 
     if found is not None:
         return _from_cache(found, inputs)
     folder = check_output_folder(user_folder(environ), "the reference cache")
-    image, stats = render_reference(scene, inputs, progress)
-    entry = write_reference(folder, inputs, image, stats, file_name=file_name)
-    return Reference(entry.path, inputs, "rendered", stats)
+    image, run = render_reference(scene, inputs, progress)
+    entry = write_reference(folder, inputs, image, run, file_name=file_name)
+    return Reference(entry.path, inputs, "rendered", run)
 
 
 def ensure_references(scene, inputs: Sequence[ReferenceInputs], progress: ProgressCallback | None = None,
@@ -135,9 +134,9 @@ def ensure_references(scene, inputs: Sequence[ReferenceInputs], progress: Progre
             else:
                 if folder is None:              # a cached entry went away since the lookup
                     folder = check_output_folder(user_folder(environ), "the reference cache")
-                image, stats = render_reference(scene, item, steps.sub(label, echo="uniform: "))
-                entry = write_reference(folder, item, image, stats, file_name=file_name)
-                reference = Reference(entry.path, item, "rendered", stats)
+                image, run = render_reference(scene, item, steps.sub(label, echo="uniform: "))
+                entry = write_reference(folder, item, image, run, file_name=file_name)
+                reference = Reference(entry.path, item, "rendered", run)
             steps.finish()
             if on_frame is not None:
                 on_frame(reference)
@@ -146,19 +145,17 @@ def ensure_references(scene, inputs: Sequence[ReferenceInputs], progress: Progre
 
 
 def _from_cache(found: CachedReference, inputs: ReferenceInputs) -> Reference:
-    return Reference(found.path, inputs, found.source, found.record.get("stats", {}))
+    return Reference(found.path, inputs, found.source, ReferenceRun.from_json(found.record.get("stats")))
 
 
 def render_reference(scene, inputs: ReferenceInputs, progress: ProgressCallback | None = None):
     """Render the reference (uniform, ``inputs.spp`` samples, ``inputs.seed``, denoised like
-    every run) at ``inputs.frame`` and ``inputs.resolution``; returns (image, stats)."""
+    every run) at ``inputs.frame`` and ``inputs.resolution``; returns (image, ReferenceRun)."""
     options = RenderOptions(max_spp=inputs.spp, seed=inputs.seed, resolution=inputs.resolution,
                             denoise=True).check()
     started = time.perf_counter()
     with preserved_scene(scene):
         scene.frame_set(inputs.frame)
         outcome = render_uniform(scene, options, spp=inputs.spp, progress=progress)
-    stats = {key: outcome.stats[key] for key in ("mode", "resolution", "seed", "wall_s", "phases_s",
-                                                  "mean_spp", "total_samples", "cycles_sync_s")}
-    stats["reference_wall_s"] = time.perf_counter() - started
-    return outcome.image, stats
+    return outcome.image, ReferenceRun(outcome.stats.to_json(keep=ReferenceRun.KEPT),
+                                       time.perf_counter() - started)

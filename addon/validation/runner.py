@@ -23,6 +23,7 @@ from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback, WeightedSteps
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_request import RenderRequest
+from ...core.sampling.render_stats import RenderStats
 from ...core.validation.compare import compare_with_gold
 from ...core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
                                     map_seconds, scaled_size, scene_variants)
@@ -198,8 +199,7 @@ class _SceneRun:
             # XSL's wall time, maps included, without its denoising pass: the baseline's
             # time limit covers its rendering, and its own denoising pass comes on top.
             source = self.records[EQUAL_TIME_SOURCE]
-            stats = source["stats"]
-            inputs["budget_s"] = stats["wall_s"] - stats["phases_s"].get("denoise", 0.0)
+            inputs["budget_s"] = RenderStats.from_json(source["stats"]).render_seconds
             inputs["budget_from_hash"] = source["input_hash"]
         return inputs
 
@@ -246,8 +246,8 @@ class _SceneRun:
         write_exr(exr, outcome.image, ["R", "G", "B", "A"], attributes=attributes)
         write_exr(spp_exr, outcome.samples, ["Y"], attributes=attributes)
         write_png(spp_png, outcome.samples / float(options.max_spp))
-        outcome.stats["write_s"] = time.perf_counter() - started     # not part of the timing
-        record = {"inputs": inputs, "input_hash": digest, "stats": outcome.stats,
+        outcome.stats.write_s = time.perf_counter() - started     # not part of the timing
+        record = {"inputs": inputs, "input_hash": digest, "stats": outcome.stats.to_json(),
                   "files": {"image": self.rel(exr), "spp": self.rel(spp_exr), "spp_png": self.rel(spp_png)}}
         write_record(exr.with_suffix(".json"), record)
         self.results["rendered"] += 1

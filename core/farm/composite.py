@@ -20,7 +20,7 @@ from .task_groups import group_plan
 
 @dataclass
 class CompositeResult:
-    stats: dict
+    stats: dict             # the frame's record (``core.farm.frame_outputs``)
     skipped: bool           # the outputs were already there and current
 
 
@@ -74,7 +74,7 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
     attributes = frame_attributes(mode, options.max_spp, options.seed, samples.mean(dtype="float64"))
     total = float(samples.sum(dtype="float64"))
     render_seconds = sum(float(tile.get("seconds", 0.0)) for tile in tiles)
-    stats = {
+    record_json = {
         "format": RECORD_FORMAT, "kind": FRAME_KIND,
         "inputs": inputs_digest, "image_sha256": None, "spp_sha256": None,
         "mode": mode, "frame": files.frame, "scene": record.scene_name,
@@ -95,8 +95,8 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
         "options": options.to_dict(), "map_options": record.data["inputs_detail"]["map_options"],
         "out": str(files.image),
     }
-    stats["phases_s"]["composite"] = time.perf_counter() - started
+    record_json["phases_s"]["composite"] = time.perf_counter() - started
     # wall_s: the compute the frame cost across its tasks (what --budget-from compares
     # against), not the elapsed time of the job, which depends on how many machines ran it.
-    write_frame_outputs(files, image, samples, options.max_spp, attributes, stats)
-    return CompositeResult(stats, skipped=False)
+    write_frame_outputs(files, image, samples, options.max_spp, attributes, record_json)
+    return CompositeResult(record_json, skipped=False)

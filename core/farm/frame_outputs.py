@@ -12,6 +12,7 @@ job's render step both finish their frames here.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,16 +24,33 @@ from .files import RECORD_FORMAT, FrameFiles, read_record, recorded_file_intact,
 FRAME_KIND = "xsl-render farm frame"
 
 
+@dataclass(frozen=True)
+class FrameSummary:
+    """What a task reports of a finished frame, read from its record."""
+
+    resolution: tuple[int, int]
+    mean_spp: float
+    renders: int
+    wall_s: float
+    time_budget_s: float | None = None      # a guided frame's
+    cycles_sync_s: float | None = None
+
+    @classmethod
+    def from_record(cls, record: dict) -> "FrameSummary":
+        return cls(tuple(record["resolution"]), float(record["mean_spp"]), int(record["renders"]),
+                   float(record["wall_s"]), record.get("time_budget_s"), record.get("cycles_sync_s"))
+
+
 def valid_frame_outputs(files: FrameFiles, inputs_digest: str) -> dict | None:
     """The frame's statistics when its files are finished and were made from the inputs of
     ``inputs_digest``, else None."""
-    stats = read_record(files.stats)
-    if stats is None or stats.get("inputs") != inputs_digest:
+    record = read_record(files.stats)
+    if record is None or record.get("inputs") != inputs_digest:
         return None
-    if not (recorded_file_intact(stats, "image_sha256", files.image)
-            and recorded_file_intact(stats, "spp_sha256", files.spp_image)):
+    if not (recorded_file_intact(record, "image_sha256", files.image)
+            and recorded_file_intact(record, "spp_sha256", files.spp_image)):
         return None
-    return stats
+    return record
 
 
 def guided_frame_record(inputs: dict, stats: dict) -> dict:
@@ -43,12 +61,12 @@ def guided_frame_record(inputs: dict, stats: dict) -> dict:
 
 
 def write_frame_outputs(files: FrameFiles, image: np.ndarray, samples: np.ndarray, spp_scale: float,
-                        attributes: dict, stats: dict) -> dict:
+                        attributes: dict, record: dict) -> dict:
     """Write the frame's image, samples and ``stats`` as one set (see the module docstring).
 
-    ``stats`` holds the record (``format``, ``kind``, ``inputs``); the images' hashes, the
-    time the writes took (phase "write") and ``wall_s`` (the sum of the phases) are added.
-    The PNG's grey level is spp / ``spp_scale``. Returns ``stats``.
+    ``record`` is the frame's statistics as its record (``format``, ``kind``, ``inputs``);
+    the images' hashes, the time the writes took (phase "write") and ``wall_s`` (the sum of
+    the phases) are added. The PNG's grey level is spp / ``spp_scale``. Returns ``record``.
     """
     started = time.perf_counter()
     for path in (files.image, files.spp_image, files.spp_preview, files.stats):
@@ -58,9 +76,9 @@ def write_frame_outputs(files: FrameFiles, image: np.ndarray, samples: np.ndarra
         write_exr(image_path, image, ["R", "G", "B", "A"], attributes=attributes, atomic=False)
         write_exr(spp_path, samples, ["Y"], attributes=attributes, atomic=False)
         write_png(preview_path, samples / float(spp_scale), atomic=False)
-        stats["image_sha256"] = file_sha256(image_path)
-        stats["spp_sha256"] = file_sha256(spp_path)
-        stats["phases_s"]["write"] = time.perf_counter() - started
-        stats["wall_s"] = sum(stats["phases_s"].values())
-        write_json(stats_path, stats, atomic=False)
-    return stats
+        record["image_sha256"] = file_sha256(image_path)
+        record["spp_sha256"] = file_sha256(spp_path)
+        record["phases_s"]["write"] = time.perf_counter() - started
+        record["wall_s"] = sum(record["phases_s"].values())
+        write_json(stats_path, record, atomic=False)
+    return record

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..files import output_set, write_json
 from ..imageio import write_exr, write_png
+from .render_stats import RenderStats
 
 
 def spp_paths(out: Path) -> tuple[Path, Path]:
@@ -41,23 +42,22 @@ def preview_scale(ceiling: int | None, samples: np.ndarray) -> int:
     return max(1, int(np.max(samples))) if ceiling is None else int(ceiling)
 
 
-def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: dict,
+def write_render_outputs(out: str | Path, image: np.ndarray, samples: np.ndarray, stats: RenderStats,
                          max_spp: int, seed: int, stats_path: str | Path | None = None) -> list[Path]:
     """Write the image and its samples (and ``stats`` as JSON when ``stats_path`` is given),
     all together or none (``core.files.output_set``).
 
-    The time the writes took is added to ``stats`` as the "write" phase.
+    The time the writes took is added to ``stats`` as the "write" phase (and so to its wall time).
     """
     out = Path(out)
     started = time.perf_counter()
-    attributes = frame_attributes(stats["mode"], max_spp, seed, stats["mean_spp"])
+    attributes = frame_attributes(stats.mode, max_spp, seed, stats.mean_spp)
     spp_exr, spp_png = spp_paths(out)
     with output_set():
         written = [write_exr(out, image, ["R", "G", "B", "A"], attributes=attributes),
                    write_exr(spp_exr, samples, ["Y"], attributes=attributes),
                    write_png(spp_png, samples / float(max_spp))]
-        stats["phases_s"]["write"] = time.perf_counter() - started
-        stats["wall_s"] = sum(stats["phases_s"].values())
+        stats.phases_s["write"] = time.perf_counter() - started
         if stats_path:
-            written.append(write_json(stats_path, stats))
+            written.append(write_json(stats_path, stats.to_json()))
     return written

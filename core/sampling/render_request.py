@@ -117,11 +117,6 @@ class RenderRequest:
         pixel got)."""
         return self.mode == "guided" and self.guided is not None and self.guided.max_spp is None
 
-    def budget_stats(self) -> dict:
-        """What the run's stats record about where its budget came from."""
-        out = {}
-        if self.budget_from is not None:
-            out["budget_from"] = self.budget_from
-        if self.budget_mean_spp is not None:
-            out["budget_mean_spp"] = self.budget_mean_spp
-        return out
+    def record_budget(self, stats) -> None:
+        """Record in the run's ``RenderStats`` where its budget came from."""
+        stats.budget_from, stats.budget_mean_spp = self.budget_from, self.budget_mean_spp

@@ -151,12 +151,38 @@ def find_reference(key: str, environ=None) -> CachedReference | None:
     return None
 
 
+@dataclass(frozen=True)
+class ReferenceRun:
+    """What a reference's cache record says about its render: the uniform run's statistics
+    (the part kept) and the seconds of the whole reference (scene opening to denoised)."""
+
+    render: dict
+    seconds: float | None = None
+
+    #: The run's statistics a cache record keeps.
+    KEPT = ("mode", "resolution", "seed", "wall_s", "phases_s", "mean_spp", "total_samples",
+            "cycles_sync_s")
+
+    @property
+    def cycles_sync_s(self) -> float:
+        return float(self.render.get("cycles_sync_s") or 0.0)
+
+    def to_json(self) -> dict:
+        return {**self.render, "reference_wall_s": self.seconds}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "ReferenceRun":
+        data = dict(data or {})
+        return cls(data, data.pop("reference_wall_s", None))
+
+
 def write_reference(folder: str | os.PathLike, inputs: ReferenceInputs, image: np.ndarray,
-                    stats: dict, file_name: str | None = None) -> CachedReference:
+                    run: ReferenceRun, file_name: str | None = None) -> CachedReference:
     """Write the entry for ``inputs`` into ``folder``: the EXR first, the record last.
     ``file_name`` (the .blend's name) is kept in the record for people, not in the key."""
     exr, record_path = entry_paths(folder, inputs.key)
-    record = {"input_hash": inputs.key, "file": file_name, "inputs": inputs.to_dict(), "stats": stats}
+    record = {"input_hash": inputs.key, "file": file_name, "inputs": inputs.to_dict(),
+              "stats": run.to_json()}
     # A set of its own, even inside a command's: the entry is read back at once (the
     # reference command copies it) and outlives the command as a cache entry.
     with output_set(own=True):

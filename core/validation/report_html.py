@@ -153,15 +153,14 @@ def _scene_table(runs: dict) -> str:
     rows = []
     for name, run in runs.items():
         css = "gold" if name == "gold" else ("equal" if run.get("kind") in ("uniform", "adaptive") else "")
-        stats = run.get("stats", {})
         time_cell = f"{run['time_s']:.2f} s"
         if run.get("maps_s"):
             time_cell += f" <span class=note>({run['maps_s']:.2f} maps)</span>"
-        if stats.get("stopped_by_time") is False and stats.get("time_budget_s"):
+        if run.get("done_early"):
             time_cell += " <span class=note title='every sample rendered before the limit'>(done early)</span>"
         cells = [f"<td class=l>{escape(run.get('label', name))}</td>", f"<td>{time_cell}</td>",
                  f"<td>{'-' if name == 'gold' else _speedup(run)}</td>",
-                 f"<td>{stats.get('mean_spp', 0):.2f}</td>"]
+                 f"<td>{run.get('mean_spp', 0):.2f}</td>"]
         if name == "gold":
             cells.append("<td class=skip colspan=8>the reference</td>")
         else:
@@ -267,7 +266,7 @@ def _scene_section(scene_name: str, scene: dict, out_dir: Path) -> str:
     for name, run in runs.items():
         parts.append(f"<div class=name>{escape(run.get('label', name))}</div>")
         parts.append(_img(display_dir / f"{name}.png", f"{run['time_s']:.2f} s"))
-        parts.append(_img(out_dir / run["files"]["spp_png"], f"mean {run['stats'].get('mean_spp', 0):.2f} spp"))
+        parts.append(_img(out_dir / run["files"]["spp_png"], f"mean {run.get('mean_spp', 0):.2f} spp"))
         flip = run.get("reference_metrics", {}).get("flip", {})
         path = run.get("reference_heatmaps", {}).get("flip")
         parts.append(_img(out_dir / path, f"mean FLIP {flip.get('mean_flip', 0):.4f}") if path

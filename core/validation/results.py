@@ -11,6 +11,7 @@ per-tile details stay in each run's own record (``<scene>/<variant>.json``).
 """
 from __future__ import annotations
 
+from ..sampling.render_stats import RenderStats
 from .curves import speedups_against
 from .curves_results import metric_values
 
@@ -22,22 +23,22 @@ _STATS_KEPT = ("mode", "resolution", "max_spp", "seed", "wall_s", "phases_s", "t
 
 def run_summary(variant, record: dict, gold: dict, reused: bool) -> dict:
     """One variant's entry: files, timing, samples, speedups and metrics."""
-    stats = record["stats"]
+    stats, gold_stats = RenderStats.from_json(record["stats"]), RenderStats.from_json(gold["stats"])
     comparison = record.get("comparison", {})
-    wall = float(stats["wall_s"])
-    maps = float(stats.get("phases_s", {}).get("maps", 0.0))
-    gold_wall = float(gold["stats"]["wall_s"])
+    wall, maps, gold_wall = stats.wall_s, stats.phase("maps"), gold_stats.wall_s
     return {
         **variant.to_dict(),
         "files": record["files"],
         "heatmaps": comparison.get("heatmaps", {}),
-        "stats": {key: stats[key] for key in _STATS_KEPT if key in stats},
+        "stats": stats.to_json(keep=_STATS_KEPT),
+        "done_early": stats.stopped_by_time is False and bool(stats.time_budget_s),
+        "mean_spp": stats.mean_spp,
         "time_s": wall,
         "maps_s": maps,
         "render_s": wall - maps,
         "speedup_over_gold": gold_wall / wall if wall > 0 else None,
-        "sample_ratio_over_gold": (float(gold["stats"]["total_samples"]) / stats["total_samples"]
-                                   if stats.get("total_samples") else None),
+        "sample_ratio_over_gold": (gold_stats.total_samples / stats.total_samples
+                                   if stats.total_samples else None),
         "metrics": comparison.get("metrics", {}),
         "reference_metrics": record.get("reference_comparison", {}).get("metrics", {}),
         "reference_heatmaps": record.get("reference_comparison", {}).get("heatmaps", {}),

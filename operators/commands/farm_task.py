@@ -33,6 +33,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ...core.farm.frame_outputs import FrameSummary
 from ...core.farm.task_progress import TaskProgress
 from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
@@ -213,10 +214,10 @@ def _composite(args) -> int:
         report.status(f"frame {frame}: compositing")
         result = composite_frame(files, args.groups, denoiser=_blender_denoiser)
         report.progress((index + 1) / len(frames))
-        stats = result.stats
-        state = "already done" if result.skipped else "written"
-        print(f"frame {frame}: {files.image} {state}: {stats['resolution'][0]}x{stats['resolution'][1]}, "
-              f"mean {stats['mean_spp']:.2f} spp in {stats['renders']} rectangles", flush=True)
+        frame_summary = FrameSummary.from_record(result.stats)
+        (width, height), state = frame_summary.resolution, "already done" if result.skipped else "written"
+        print(f"frame {frame}: {files.image} {state}: {width}x{height}, "
+              f"mean {frame_summary.mean_spp:.2f} spp in {frame_summary.renders} rectangles", flush=True)
     return 0
 
 
@@ -239,11 +240,12 @@ def _guided(args) -> int:
     for outcome in outcomes:
         for warning in outcome.warnings:
             print(f"xsl-render: warning: frame {outcome.frame}: {warning}", file=sys.stderr)
-        stats, state = outcome.stats, "already done" if outcome.reused else "written"
-        sync = stats.get("cycles_sync_s")
+        frame_summary = FrameSummary.from_record(outcome.stats)
+        (width, height), state = frame_summary.resolution, "already done" if outcome.reused else "written"
+        sync = frame_summary.cycles_sync_s
         print(f"frame {outcome.frame}: {FrameFiles(Path(args.output), outcome.frame).image} {state}: "
-              f"{stats['resolution'][0]}x{stats['resolution'][1]}, mean {stats['mean_spp']:.2f} spp in "
-              f"{stats['renders']} render(s), {stats['wall_s']:.2f} s of its {stats['time_budget_s']:.2f} s budget"
+              f"{width}x{height}, mean {frame_summary.mean_spp:.2f} spp in {frame_summary.renders} render(s), "
+              f"{frame_summary.wall_s:.2f} s of its {frame_summary.time_budget_s:.2f} s budget"
               + ("" if sync is None else f", Cycles sync {sync:.2f} s"))
     done = sum(len(outcome.done_now) for outcome in outcomes)
     print(f"{_chunk(frames)}: {done} rendered now, {len(outcomes) - done} already done")

@@ -131,7 +131,7 @@ def run(args) -> int:
     size = f"{inputs.resolution[0]}x{inputs.resolution[1]}"
     what = f"{size}, {inputs.spp} spp, seed {inputs.seed}, frame {inputs.frame}"
     if reference.source == "rendered":
-        print(f"reference: rendered {what} in {reference.stats['reference_wall_s']:.1f} s, "
+        print(f"reference: rendered {what} in {reference.run.seconds:.1f} s, "
               f"cached as {reference.path} -> {out}")
     else:
         where = "shipped with the repository" if reference.source == "shipped" else "user cache"
@@ -167,8 +167,8 @@ def _run_frames(args, scene, path: Path, resolution, frames) -> int:
         if reference.source == "rendered":
             counts["rendered"] += 1
             print(f"reference: rendered {_describe(reference)} in "
-                  f"{reference.stats['reference_wall_s']:.1f} s (Cycles synced the scene for "
-                  f"{reference.stats.get('cycles_sync_s', 0.0):.1f} s) -> {out}", flush=True)
+                  f"{reference.run.seconds:.1f} s (Cycles synced the scene for "
+                  f"{reference.run.cycles_sync_s:.1f} s) -> {out}", flush=True)
         else:
             counts["cached"] += 1
             where = "shipped with the repository" if reference.source == "shipped" else "user cache"

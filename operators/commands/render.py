@@ -15,7 +15,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from ...core.checks import MAX_SAMPLES, finite_number, separate_files
+from ...core.checks import separate_files
 from ...core.errors import InputError
 from ...core.frames import frame_path, has_frame_marker, parse_frame_list
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
@@ -125,31 +125,22 @@ def outputs_as_a_set(args) -> bool:
     return args.frames is None
 
 
-def _read_budget(path: str) -> dict:
+def _read_budget(path: str):
+    """The budget recorded in the stats file ``path`` (``RecordedBudget``)."""
+    from ...core.sampling.render_stats import RecordedBudget
+
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise InputError(f"no such stats file: {path}") from None
     except (OSError, ValueError, RecursionError) as error:
         raise InputError(f"cannot read stats file {path}: {str(error).splitlines()[0]}") from None
-    if not isinstance(data, dict) or not {"mean_spp", "wall_s"} <= data.keys():
-        raise InputError(f"{path} is not the --stats JSON of an xsl-render render run")
-    phases = data.get("phases_s", {})
-    if not isinstance(phases, dict):
-        raise InputError(f"{path}: phases_s must be an object of seconds")
-    # Numbers as a run writes them: finite, not negative, samples Cycles can take.
-    for key, value, hi in (("wall_s", data["wall_s"], None), ("mean_spp", data["mean_spp"], MAX_SAMPLES),
-                           ("phases_s.denoise", phases.get("denoise", 0.0), None)):
-        if isinstance(value, (bool, str)) or not isinstance(value, (int, float)):
-            raise InputError(f"{path}: {key} must be a number, not {value!r}")
-        finite_number(value, lo=0.0, hi=hi, name=f"{path}: {key}")
-    return data
+    return RecordedBudget.from_json(data, path)
 
 
-def _render_budget(stats: dict, path: str) -> float:
-    """Wall time an equal-time run may render for: the selective run's, less its denoising
-    (the equal-time run denoises its own frame after Cycles stops, just as long)."""
-    seconds = float(stats["wall_s"]) - float(stats.get("phases_s", {}).get("denoise", 0.0))
+def _render_budget(budget, path: str) -> float:
+    """Wall time an equal-time run may render for (``RecordedBudget.render_seconds``)."""
+    seconds = budget.render_seconds
     if seconds <= 0.0:
         raise InputError(f"{path} leaves no time to render (wall_s less its denoising is {seconds:g} s)")
     return seconds
@@ -186,9 +177,8 @@ def _request(args, options) -> tuple:
         if args.spp is not None:
             return replace(request, spp=args.spp).check(), None
         if stats is not None:
-            return replace(request, spp=max(1, int(round(float(stats["mean_spp"])))),
-                           budget_from=args.budget_from,
-                           budget_mean_spp=float(stats["mean_spp"])).check(), None
+            return replace(request, spp=max(1, int(round(stats.mean_spp))),
+                           budget_from=args.budget_from, budget_mean_spp=stats.mean_spp).check(), None
         raise InputError("--mode uniform needs --spp N, --budget-from STATS.json or --equal-time SECONDS")
     if args.mode == "adaptive":
         if args.equal_time is not None and args.equal_time > 0:
@@ -266,7 +256,8 @@ def run(args) -> int:
     for warning in outcome.warnings:
         print(f"xsl-render: warning: {warning}", file=sys.stderr)
     stats = outcome.stats
-    stats.update(file=str(args.scene), out=str(out), **request.budget_stats())
+    stats.file, stats.out = str(args.scene), str(out)
+    request.record_budget(stats)
     write_render_outputs(out, outcome.image, outcome.samples, stats, spp_scale(request, outcome),
                          options.seed, args.stats)
     print(summary_line(args.mode, stats, out))

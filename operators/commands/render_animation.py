@@ -26,6 +26,7 @@ def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> i
     from ...addon.frame_jobs import frames_steps
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
+    from ...core.sampling.render_stats import sequence_stats
     from ...core.sampling.guided_plan import SequenceBudget
     from ...core.maps.files import write_map_set
     from ...core.maps.xmap import XMapWarning
@@ -46,7 +47,7 @@ def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> i
     def on_frame(result) -> dict:
         path = Path(frame_path(str(out), result.frame))
         stats = result.outcome.stats
-        stats.update(frame=result.frame, file=str(args.scene), out=str(path))
+        stats.frame, stats.file, stats.out = result.frame, str(args.scene), str(path)
         for warning in result.outcome.warnings:
             print(f"xsl-render: warning: frame {result.frame}: {warning}", file=sys.stderr)
         write_render_outputs(path, result.outcome.image, result.outcome.samples, stats,
@@ -54,7 +55,7 @@ def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> i
         if save_maps is not None and result.maps is not None:
             write_map_set(maps_folder(save_maps, result.frame), result.maps)
         print(f"frame {result.frame}: " + summary_line(args.mode, stats, path)
-              + f" (Cycles synced the scene in {stats.get('cycles_sync_s', 0.0):.2f} s)", flush=True)
+              + f" (Cycles synced the scene in {stats.cycles_sync_s or 0.0:.2f} s)", flush=True)
         return stats
 
     started = time.perf_counter()
@@ -67,15 +68,10 @@ def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> i
             bar.close()
         if save_maps is None:
             shutil.rmtree(cache_dir, ignore_errors=True)
-    hits = [stats["maps"]["ray_cache_hit"] for stats in done if "maps" in stats]
+    hits = [stats.maps.ray_cache_hit for stats in done if stats.maps is not None]
     if args.stats:
-        write_json(args.stats, {
-            "mode": args.mode, "file": str(args.scene), "out": str(out),
-            "frames": done, "frame_range": frame_expression(args.frames),
-            "wall_s": time.perf_counter() - started,
-            "total_samples": sum(stats["total_samples"] for stats in done),
-            "ray_cache_hits": sum(hits),
-            "cycles_sync_s": sum(stats.get("cycles_sync_s", 0.0) for stats in done)})
+        write_json(args.stats, sequence_stats(done, args.mode, str(args.scene), str(out),
+                                              frame_expression(args.frames), time.perf_counter() - started))
     if hits:
         print(f"{len(done)} frames; camera rays cast {hits.count(False)} time(s), reused "
               f"{hits.count(True)} time(s)")

@@ -26,6 +26,8 @@ def spp_scale(request, outcome) -> int:
     return preview_scale(None if request.unbounded else request.options.max_spp, outcome.samples)
 
 
-def summary_line(mode: str, stats: dict, out: Path) -> str:
-    return (f"{mode}: {stats['resolution'][0]}x{stats['resolution'][1]}, mean "
-            f"{stats['mean_spp']:.2f} spp in {stats['renders']} render(s), {stats['wall_s']:.2f} s -> {out}")
+def summary_line(mode: str, stats, out: Path) -> str:
+    """One run's line: size, mean samples, renders and wall time (``RenderStats``)."""
+    width, height = stats.resolution
+    return (f"{mode}: {width}x{height}, mean {stats.mean_spp:.2f} spp in {stats.renders} render(s), "
+            f"{stats.wall_s:.2f} s -> {out}")
