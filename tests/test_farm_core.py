@@ -204,14 +204,14 @@ def test_bad_farm_jobs(tmp_path, changes, message):
         job_template(farm_job(tmp_path, **changes))
 
 
-def guided_job(tmp_path: Path, **guided_changes) -> FarmJob:
-    guided = GuidedOptions(**{"time_budget": 12.5, "importance": "xs", "tile_size": 16, **guided_changes})
+def guided_job(tmp_path: Path, max_spp: int = UNBOUNDED_SPP, tile_size: int = 16, **guided_changes) -> FarmJob:
+    guided = GuidedOptions(**{"time_budget": 12.5, "importance": "xs", **guided_changes})
     return farm_job(tmp_path, mode="guided", guided=guided, tasks_per_frame=1,
-                    options=RenderOptions(max_spp=guided.ceiling, tile_size=16, seed=7, resolution=(96, 54)))
+                    options=RenderOptions(max_spp=max_spp, tile_size=tile_size, seed=7, resolution=(96, 54)))
 
 
 def test_guided_template_is_one_task_per_chunk_with_every_knob_a_parameter(tmp_path):
-    job = guided_job(tmp_path, max_spp=None, pilot_fraction=0.3, exponent=0.5, level_ratio=2.0)
+    job = guided_job(tmp_path, pilot_fraction=0.3, exponent=0.5, level_ratio=2.0)
     template = decoded(job_template(job))
     values = openjd_values(parameter_values(job))
     assert values["TimeBudget"] == 12.5 and values["Importance"] == "xs" and values["MaxSpp"] == 0
@@ -247,12 +247,16 @@ def test_guided_template_is_one_task_per_chunk_with_every_knob_a_parameter(tmp_p
     ({"guided": None}, "--mode guided needs --time-budget"),
     ({"guided": GuidedOptions(time_budget=0.0005)}, "--time-budget must be between 0.001 and"),
     ({"guided": GuidedOptions(time_budget=float("nan"))}, "--time-budget must be a positive number"),
-    ({"guided": GuidedOptions(time_budget=5.0, tile_size=128)}, "--tile-size 128 is larger"),
     ({"mode": "xsl"}, "--time-budget is for --mode guided"),
 ])
 def test_bad_guided_farm_jobs(tmp_path, changes, message):
     with refused_in_flags(message):
         job_template(replace(guided_job(tmp_path), **changes))
+
+
+def test_a_guided_farm_jobs_tiles_fit_its_frame(tmp_path):
+    with refused_in_flags("--tile-size 128 is larger"):
+        job_template(guided_job(tmp_path, tile_size=128))
 
 
 # -- the bundle folder --------------------------------------------------------------------------

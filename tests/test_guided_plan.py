@@ -85,8 +85,9 @@ def test_final_pass_spends_its_samples_where_the_error_is():
     windows = tile_windows(width, height, tile)
     scores = np.ones(len(windows))
     scores[0] = 50.0                                     # one tile with much more error
-    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=tile, level_ratio=1.5)
-    final = plan_final_pass(scores, None, width, height, options, pixel_samples=20 * width * height)
+    options = GuidedOptions(time_budget=1.0, exponent=1.0, level_ratio=1.5)
+    final = plan_final_pass(scores, None, width, height, options, pixel_samples=20 * width * height,
+                            tile_size=tile, ceiling=UNBOUNDED_SPP)
     spp, covered = _spp_map(final, width, height)
     assert covered.min() == covered.max() == 1           # every pixel once
     row0, row1, col0, col1 = windows[0]
@@ -95,17 +96,19 @@ def test_final_pass_spends_its_samples_where_the_error_is():
 
 
 def test_exponent_zero_is_uniform():
-    options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
+    options = GuidedOptions(time_budget=1.0, exponent=0.0)
     scores = np.random.default_rng(0).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
-    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=6 * 64 * 48)
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=6 * 64 * 48,
+                            tile_size=16, ceiling=UNBOUNDED_SPP)
     assert {rect.spp for rect in final.rects} == {6} and final.flat
 
 
 @pytest.mark.parametrize("exponent", [0.0, 1.0])
 def test_importance_weighs_the_samples_whatever_the_scores_exponent(exponent):
-    options = GuidedOptions(time_budget=1.0, exponent=exponent, tile_size=32, level_ratio=1.01)
+    options = GuidedOptions(time_budget=1.0, exponent=exponent, level_ratio=1.01)
     importance = np.array([0.05, 1.0])
-    final = plan_final_pass(np.ones(2), importance, 64, 32, options, pixel_samples=100 * 64 * 32)
+    final = plan_final_pass(np.ones(2), importance, 64, 32, options, pixel_samples=100 * 64 * 32,
+                            tile_size=32, ceiling=UNBOUNDED_SPP)
     spp, _ = _spp_map(final, 64, 32)
     ratio = spp[:, 32:].mean() / spp[:, :32].mean()
     assert ratio == pytest.approx(20 ** IMPORTANCE_EXPONENT, rel=0.05)     # gently: 1.57x
@@ -113,9 +116,10 @@ def test_importance_weighs_the_samples_whatever_the_scores_exponent(exponent):
 
 @pytest.mark.parametrize("pixel_samples", [0.0, 10.0, 64 * 48 * 0.5])
 def test_every_pixel_gets_a_sample_however_small_the_budget(pixel_samples):
-    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16)
+    options = GuidedOptions(time_budget=1.0, exponent=1.0)
     scores = np.random.default_rng(1).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
-    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=pixel_samples)
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=pixel_samples,
+                            tile_size=16, ceiling=UNBOUNDED_SPP)
     covered = np.zeros((48, 64), int)
     for rect in final.rects:
         assert rect.spp >= 1
@@ -124,19 +128,20 @@ def test_every_pixel_gets_a_sample_however_small_the_budget(pixel_samples):
 
 
 def test_a_flat_plan_is_three_columns():
-    options = GuidedOptions(time_budget=1.0, exponent=0.0, tile_size=16)
+    options = GuidedOptions(time_budget=1.0, exponent=0.0)
     final = plan_final_pass(np.ones(len(tile_windows(96, 54, 16))), None, 96, 54, options,
-                            pixel_samples=32 * 96 * 54)
+                            pixel_samples=32 * 96 * 54, tile_size=16, ceiling=UNBOUNDED_SPP)
     assert final.flat
     assert [rect.window for rect in final.rects] == [(0, 54, 0, 32), (0, 54, 32, 64), (0, 54, 64, 96)]
     assert {rect.spp for rect in final.rects} == {32}
 
 
 def test_final_pass_comes_in_pieces_the_pacer_can_correct():
-    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16, level_ratio=1.5)
+    options = GuidedOptions(time_budget=1.0, exponent=1.0, level_ratio=1.5)
     scores = np.ones(len(tile_windows(96, 54, 16)))
     scores[0] = 3.0                                      # not flat: pieces to pace
-    final = plan_final_pass(scores, None, 96, 54, options, pixel_samples=32 * 96 * 54)
+    final = plan_final_pass(scores, None, 96, 54, options, pixel_samples=32 * 96 * 54,
+                            tile_size=16, ceiling=UNBOUNDED_SPP)
     assert len(final.rects) >= FINAL_PASS_PIECES
     assert max(rect.samples for rect in final.rects) <= final.samples / FINAL_PASS_PIECES + 96 * 32
     covered = np.zeros((54, 96), int)
@@ -146,9 +151,9 @@ def test_final_pass_comes_in_pieces_the_pacer_can_correct():
 
 
 def test_final_pass_obeys_the_ceiling():
-    options = GuidedOptions(time_budget=1.0, exponent=1.0, tile_size=16, max_spp=5)
+    options = GuidedOptions(time_budget=1.0, exponent=1.0)
     scores = np.random.default_rng(2).uniform(0.1, 10, size=len(tile_windows(64, 48, 16)))
-    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=1e9)
+    final = plan_final_pass(scores, None, 64, 48, options, pixel_samples=1e9, tile_size=16, ceiling=5)
     assert {rect.spp for rect in final.rects} == {5}
 
 
@@ -185,10 +190,9 @@ def test_side_by_side_renders_are_capped_against_the_repriced_plan():
 @pytest.mark.parametrize("field, value, message", [
     ("time_budget", 0.0, "--time-budget"), ("time_budget", -1.0, "--time-budget"),
     ("time_budget", math.nan, "--time-budget"), ("time_budget", math.inf, "--time-budget"),
-    ("max_spp", 0, "--max-spp"), ("max_spp", UNBOUNDED_SPP + 1, "--max-spp"),
     ("pilot_fraction", 0.0, "--pilot-fraction"), ("pilot_fraction", 1.5, "--pilot-fraction"),
     ("exponent", -0.1, "--guided-exponent"), ("exponent", math.nan, "--guided-exponent"),
-    ("importance", "s", "--importance"), ("tile_size", 4, "--tile-size"),
+    ("importance", "s", "--importance"),
     ("level_ratio", 1.0, "--level-ratio"),
 ])
 def test_bad_guided_options_are_refused(field, value, message):

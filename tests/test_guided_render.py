@@ -11,7 +11,7 @@ from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
 from xsl_render.addon.scene.state import preserved_scene, settings_dump
 from xsl_render.core.sampling.guided_plan import GuidedOptions
 from xsl_render.core.sampling.pass_merge import PassAccumulator
-from xsl_render.core.sampling.render_options import RenderOptions
+from xsl_render.core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
@@ -71,8 +71,8 @@ def test_passes_of_two_seeds_merge_into_one_estimate(fog):
 @pytest.mark.parametrize("exponent", [0.0, 0.15])
 def test_guided_render_keeps_its_time_budget(fog, exponent):
     budget = 4.0
-    outcome = render_guided(fog, RenderOptions(max_spp=64, resolution=(96, 54)),
-                            GuidedOptions(time_budget=budget, tile_size=16, exponent=exponent))
+    outcome = render_guided(fog, RenderOptions(max_spp=UNBOUNDED_SPP, tile_size=16, resolution=(96, 54)),
+                            GuidedOptions(time_budget=budget, exponent=exponent))
     stats = outcome.stats
     assert 0.85 * budget <= stats.wall_s <= 1.1 * budget     # early by 15 % at most (issue 20)
     assert stats.wall_s == pytest.approx(sum(stats.phases_s.values()))
@@ -88,7 +88,7 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
 
 def test_guided_render_obeys_its_ceiling_and_restores_the_scene(fog):
     before = settings_dump(fog)
-    outcome = render_guided(fog, RenderOptions(max_spp=8), GuidedOptions(time_budget=6.0, max_spp=8))
+    outcome = render_guided(fog, RenderOptions(max_spp=8), GuidedOptions(time_budget=6.0))
     assert outcome.samples.max() <= 8
     assert outcome.stats.wall_s < 6.0                    # done when every pixel has its 8
     assert settings_dump(fog) == before
@@ -112,8 +112,7 @@ def test_guided_render_syncs_heterogeneous_fog_once(blender):
         started = time.perf_counter()
         renderer.render(None, 1)
         first_sync = time.perf_counter() - started
-    outcome = render_guided(scene, options, GuidedOptions(time_budget=max(2.0, 2.5 * first_sync),
-                                                          max_spp=16, tile_size=8).check())
+    outcome = render_guided(scene, options, GuidedOptions(time_budget=max(2.0, 2.5 * first_sync)).check())
     final = [tile["seconds"] for tile in outcome.stats.tiles if tile.get("pass") == "final"]
     assert final and outcome.stats.phases_s["sync"] > 0.3 * first_sync
     assert max(final) < 0.3 * outcome.stats.phases_s["sync"], (final, outcome.stats.phases_s)

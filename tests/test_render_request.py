@@ -10,10 +10,11 @@ from support.cli_wording import refused_in_flags
 from xsl_render.core.errors import SettingError
 from xsl_render.core.maps.options import MapOptions
 from xsl_render.core.sampling.guided_plan import GuidedOptions
-from xsl_render.core.sampling.render_options import RenderOptions
+from xsl_render.core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 from xsl_render.core.sampling.render_request import GUIDED_SPP, MODES, RenderRequest
 
 OPTIONS = RenderOptions(max_spp=64)
+UNBOUNDED = RenderOptions(max_spp=UNBOUNDED_SPP)
 GUIDED = GuidedOptions(time_budget=5.0)
 
 
@@ -25,14 +26,14 @@ GUIDED = GuidedOptions(time_budget=5.0)
     (RenderRequest("adaptive", OPTIONS, noise_threshold=0.05), 64.0),      # up to the ceiling
     (RenderRequest("xs", OPTIONS, map_options=MapOptions()), 64.0),
     (RenderRequest("xsl", OPTIONS), 64.0),                                  # its map from a file
-    (RenderRequest("guided", OPTIONS, guided=GUIDED), float(GUIDED_SPP)),
-    (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=5.0, max_spp=8)), 8.0),
+    (RenderRequest("guided", UNBOUNDED, guided=GUIDED), float(GUIDED_SPP)),         # no ceiling
+    (RenderRequest("guided", RenderOptions(max_spp=8), guided=GUIDED), 8.0),
 ])
 def test_requests_each_mode_takes(request_, spp):
     assert request_.check() is request_
     assert request_.mode in MODES
     assert request_.estimator_spp == spp             # what auto's bias tolerance is set for
-    assert request_.unbounded == (request_.mode == "guided" and request_.guided.max_spp is None)
+    assert request_.unbounded == (request_.options is UNBOUNDED)
 
 
 @pytest.mark.parametrize("request_, message", [

@@ -94,8 +94,8 @@ def render_guided(scene, options: RenderOptions, guided: GuidedOptions,
     Parameters
     ----------
     options
-        Seed, resolution and denoising (its ``max_spp`` is the ceiling the stats report;
-        ``guided.max_spp`` is the one the allocation obeys).
+        Seed, resolution, denoising, the ceiling (``max_spp``; ``UNBOUNDED_SPP``: none) and
+        the tiles the samples are allocated on (``tile_size``).
     guided
         The budget and how it is spent.
     importance
@@ -125,7 +125,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         if importance is not None:
             importance = check_director_map(importance, width, height)
         yield 0.0, "guided: scene sync"
-        windows = tile_windows(width, height, guided.tile_size)
+        windows = tile_windows(width, height, options.tile_size)
         image = PassAccumulator(width, height, 4)
         guides = PassAccumulator(width, height, 6)
         tiles: list[dict] = []
@@ -154,8 +154,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             first = renderer.render(None, 1, reduce=reduce)
             fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
             # (Two samples at least where the rate is all it measures: its two renders' times.)
-            have = max(1 if guided.exponent else min(2, guided.ceiling),
-                       min(guided.ceiling, _PILOT_MAX_SPP, fit))
+            have = max(1 if guided.exponent else min(2, options.max_spp),
+                       min(options.max_spp, _PILOT_MAX_SPP, fit))
             pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
             phases["pilot"] = clock.now() - began
             # No time limit: every pilot pixel has exactly ``have`` samples.
@@ -189,9 +189,11 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             # then planned again with each of its renders' fixed cost set aside too.
             denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0
             left = budget - clock.now() - denoise_reserve
-            final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate)
+            final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate,
+                                    options.tile_size, options.max_spp)
             final = plan_final_pass(scores, weights, width, height, guided,
-                                    max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate)
+                                    max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate,
+                                    options.tile_size, options.max_spp)
             rects = final.rects
             pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S,
                                 side_by_side=final.flat)
@@ -204,7 +206,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 # Every pixel gets a sample, even when the clock is already out. A flat plan
                 # takes as many as fit, at a count Cycles' patterns stratify well.
                 wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
-                spp = max(1, min(wanted, guided.ceiling))
+                spp = max(1, min(wanted, options.max_spp))
                 if final.flat:
                     spp = sobol_friendly(spp)
                 piece = renderer.render(rect.window, spp)

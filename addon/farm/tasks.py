@@ -294,7 +294,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
             frame_stats.frame, frame_stats.file, frame_stats.out = result.frame, str(scene_path), str(files.image)
             stats = guided_frame_record(inputs[result.frame],
                                         {**frame_stats.to_json(), "task": _task_record(frames)})
-            scale = preview_scale(guided.max_spp, outcome.samples)
+            scale = preview_scale(options.max_spp if options.has_ceiling else None, outcome.samples)
             attributes = frame_attributes(frame_stats.mode, scale, options.seed, frame_stats.mean_spp)
             write_frame_outputs(files, outcome.image, outcome.samples, scale, attributes, stats)
             outcomes[result.frame] = TaskOutcome(result.frame, 1, done_now=[files.stem],

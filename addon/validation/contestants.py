@@ -46,7 +46,7 @@ from ...core.errors import InputError
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback, run_steps
 from ...core.sampling.guided_plan import GuidedOptions, SequenceBudget
-from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 from ...core.sampling.render_request import RenderRequest
 from ...core.validation.contestants import Contestant
 from ..cycles import selective_render as sr
@@ -82,12 +82,14 @@ def _selective(contestant: Contestant, options: RenderOptions, budget_s) -> Rend
 
 def _guided(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
     """The guided render in ``budget_s`` seconds, its importance map (when it has one)
-    computed inside the budget."""
+    computed inside the budget, with no ceiling (as ``render --mode guided`` without
+    --max-spp: the budget alone decides)."""
     defaults = GuidedOptions(time_budget=1.0)
     guided = GuidedOptions(time_budget=float(budget_s),
                            importance=contestant.params.get("importance", defaults.importance),
                            exponent=float(contestant.params.get("exponent", defaults.exponent)))
-    return RenderRequest("guided", options, guided=guided, map_options=MapOptions())
+    return RenderRequest("guided", replace(options, max_spp=UNBOUNDED_SPP), guided=guided,
+                         map_options=MapOptions())
 
 
 def _switch_guiding_on(scene) -> None:

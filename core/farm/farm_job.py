@@ -6,7 +6,7 @@ into the Open Job Description template; both check it first (``FarmJob.check``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InputError, SettingError
@@ -106,7 +106,6 @@ class FarmJob:
                 raise SettingError("{mode} needs {time_budget.name} SECONDS", mode=self.mode,
                                    time_budget=None)
             self.guided.check()
-            replace(self.options, tile_size=self.guided.tile_size).check_frame(width, height)
         elif self.guided is not None:
             raise SettingError("{time_budget.name} is for {mode.name} guided (got {mode})",
                                time_budget=self.guided.time_budget, mode=self.mode)

@@ -12,8 +12,8 @@ from pathlib import Path
 from ..errors import InputError
 from ..maps.director import OPERATORS
 from ..maps.options import MapOptions
-from ..sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET, UNBOUNDED_SPP
-from ..sampling.render_options import MIN_TILE_SIZE
+from ..sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET
+from ..sampling.render_options import MIN_TILE_SIZE, UNBOUNDED_SPP
 from .farm_job import (DEVICES, GUIDED, MAX_FRAMES_PER_TASK, MIN_FARM_TIME_BUDGET, NO_CEILING,
                        SELECTIVE_MODES, FarmJob)
 from .task_groups import MAX_GROUPS
@@ -162,7 +162,7 @@ def _guided_parameters(job: FarmJob) -> list[dict]:
         _choice("Importance", g.importance, IMPORTANCE_MAPS, "--importance", "Director map that "
                 "weighs the estimated error: none, x, xs or xsl (computed inside the budget).",
                 render, "Importance map"),
-        _number("MaxSpp", "INT", g.max_spp or NO_CEILING, "--max-spp", "Most samples any pixel "
+        _number("MaxSpp", "INT", o.max_spp if o.has_ceiling else NO_CEILING, "--max-spp", "Most samples any pixel "
                 f"may get; {NO_CEILING}: no ceiling.", render, "Max samples per pixel",
                 low=NO_CEILING, high=UNBOUNDED_SPP),
         _text("Resolution", f"{width}x{height}", "--resolution", "Render resolution WxH.", render,
@@ -175,7 +175,7 @@ def _guided_parameters(job: FarmJob) -> list[dict]:
                 low=0.0, high=2.0),
         _number("LevelRatio", "FLOAT", g.level_ratio, "--level-ratio", "Sample counts are rounded "
                 "to powers of this ratio, in (1, 4].", render, "Level ratio", high=4.0),
-        _number("TileSize", "INT", g.tile_size, "--tile-size", "Edge of the tiles the samples are "
+        _number("TileSize", "INT", o.tile_size, "--tile-size", "Edge of the tiles the samples are "
                 "allocated on, in pixels.", render, "Tile size", low=MIN_TILE_SIZE),
         *_map_parameters(job.map_options),
         *_farm_parameters(job),

@@ -179,10 +179,9 @@ def render_options(settings) -> RenderOptions:
 
 
 def guided_options(settings) -> GuidedOptions:
-    """The GuidedOptions of a settings object: its time budget and importance map, Max
-    Samples as the per-pixel ceiling, its tile size, the command line's defaults for the
-    rest; InputError for an impossible value (a budget that is not a positive number of
-    seconds, or more than a week)."""
-    return GuidedOptions(time_budget=float(settings.time_budget), max_spp=int(settings.max_spp),
-                         importance=str(settings.importance).lower(),
-                         tile_size=int(settings.tile_size)).check()
+    """The GuidedOptions of a settings object: its time budget and importance map, the
+    command line's defaults for the rest (Max Samples and Tile Size are ``render_options``');
+    InputError for an impossible value (a budget that is not a positive number of seconds,
+    or more than a week)."""
+    return GuidedOptions(time_budget=float(settings.time_budget),
+                         importance=str(settings.importance).lower()).check()

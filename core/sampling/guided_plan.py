@@ -49,12 +49,9 @@ import numpy as np
 
 from ..errors import SettingError
 from .composite import Window
-from .render_options import MIN_TILE_SIZE
+from .render_options import UNBOUNDED_SPP  # noqa: F401 (where guided's callers found it)
 from .tile_plan import Rect, merge_rects, tile_windows
 
-#: The per-pixel ceiling when none is asked for: far above any budget's reach on a CPU, and
-#: well inside what Cycles accepts (2^24 samples).
-UNBOUNDED_SPP = 1 << 16
 #: The longest time budget accepted: a week (anything longer is a typo).
 MAX_TIME_BUDGET = 7 * 24 * 3600.0
 #: Director maps the allocation can weigh the error by.
@@ -76,14 +73,13 @@ IMPORTANCE_EXPONENT = 0.15
 
 @dataclass(frozen=True)
 class GuidedOptions:
-    """How a guided render spends its time budget.
+    """How a guided render spends its time budget. (Its ceiling and tile size are the render
+    options' ``max_spp`` and ``tile_size``, as for every mode.)
 
     Parameters
     ----------
     time_budget
         Seconds for the whole render: maps, scene sync, passes, denoising.
-    max_spp
-        Per-pixel ceiling; None: no ceiling but ``UNBOUNDED_SPP``.
     pilot_fraction
         Most of the budget (after maps and scene sync) the low-resolution pilot may take.
     exponent
@@ -93,18 +89,14 @@ class GuidedOptions:
     importance
         Director map weighting the allocation: "none", "x", "xs" or "xsl" (the tiles'
         weights go as its mean to ``IMPORTANCE_EXPONENT``).
-    tile_size
-        Edge of the tiles the allocation is made on, in pixels.
     level_ratio
         Sample counts of the final pass are rounded to powers of this ratio.
     """
 
     time_budget: float
-    max_spp: int | None = None
     pilot_fraction: float = 0.05
     exponent: float = 0.0
     importance: str = "none"
-    tile_size: int = 32
     level_ratio: float = 1.5
 
     def check(self) -> "GuidedOptions":
@@ -115,9 +107,6 @@ class GuidedOptions:
         if self.time_budget > MAX_TIME_BUDGET:
             raise SettingError("{time_budget} is more than a week",
                                time_budget=f"{self.time_budget:g} s")
-        if self.max_spp is not None and not 1 <= self.max_spp <= UNBOUNDED_SPP:
-            raise SettingError(f"{{max_spp.name}} must be between 1 and {UNBOUNDED_SPP} "
-                               "(got {max_spp.value})", max_spp=self.max_spp)
         if not (math.isfinite(self.pilot_fraction) and 0.0 < self.pilot_fraction <= 1.0):
             raise SettingError("{pilot_fraction.name} must be in (0, 1] (got {pilot_fraction.value})",
                                pilot_fraction=self.pilot_fraction)
@@ -127,17 +116,10 @@ class GuidedOptions:
         if self.importance not in IMPORTANCE_MAPS:
             raise SettingError(f"{{importance.name}} must be one of {', '.join(IMPORTANCE_MAPS)} "
                                "(got '{importance.value}')", importance=self.importance)
-        if self.tile_size < MIN_TILE_SIZE:
-            raise SettingError(f"{{tile_size.name}} must be at least {MIN_TILE_SIZE} pixels "
-                               "(got {tile_size.value})", tile_size=self.tile_size)
         if not (math.isfinite(self.level_ratio) and 1.0 < self.level_ratio <= 4.0):
             raise SettingError("{level_ratio.name} must be in (1, 4] (got {level_ratio.value})",
                                level_ratio=self.level_ratio)
         return self
-
-    @property
-    def ceiling(self) -> int:
-        return UNBOUNDED_SPP if self.max_spp is None else self.max_spp
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -236,21 +218,22 @@ class FinalPass:
 
 
 def plan_final_pass(scores: np.ndarray, importance: np.ndarray | None, width: int, height: int,
-                    options: GuidedOptions, pixel_samples: float) -> FinalPass:
-    """The final pass of a guided render: tiles of ``options.tile_size`` (the windows of
+                    options: GuidedOptions, pixel_samples: float, tile_size: int,
+                    ceiling: int) -> FinalPass:
+    """The final pass of a guided render: tiles of ``tile_size`` (the windows of
     ``tile_plan.tile_windows``, in that order, as ``scores`` and ``importance`` are) sharing
-    ``pixel_samples`` pixel-samples, every pixel at least one."""
-    windows = tile_windows(width, height, options.tile_size)
+    ``pixel_samples`` pixel-samples, every pixel at least one and at most ``ceiling``."""
+    windows = tile_windows(width, height, tile_size)
     if len(scores) != len(windows) or (importance is not None and len(importance) != len(windows)):
         raise ValueError("one score (and importance) per tile is needed")
     areas = np.array([(r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in windows], np.float64)
     weights = np.maximum(np.asarray(scores, np.float64), 1e-12) ** options.exponent
     if importance is not None:
         weights = weights * np.maximum(np.asarray(importance, np.float64), 1e-12) ** IMPORTANCE_EXPONENT
-    totals = allocate(weights, areas, 1, pixel_samples - areas.sum(), options.ceiling)
+    totals = allocate(weights, areas, 1, pixel_samples - areas.sum(), ceiling)
     # Levels anchored at the mean count: a flat allocation stays exact.
     mean = float((areas * totals).sum() / areas.sum())
-    counts = np.clip(round_to_levels(totals, options.level_ratio, anchor=round(mean)), 1, options.ceiling)
+    counts = np.clip(round_to_levels(totals, options.level_ratio, anchor=round(mean)), 1, ceiling)
     if len(set(counts.tolist())) == 1:
         # A flat plan: the frame in three columns, each next one paced by what those before
         # it cost at full resolution (the last one makes up for the second's timing noise;

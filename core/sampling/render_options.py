@@ -13,6 +13,9 @@ from ..checks import MAX_SAMPLES, MAX_SEED, frame_size, parse_frame_size, whole_
 from ..errors import Field, SettingError
 from .volume_estimator import EstimatorChoice, check_estimator, fixed_choice
 
+#: The per-pixel ceiling of a guided render asked for none: far above any budget's reach on a
+#: CPU, and well inside what Cycles accepts (2^24 samples).
+UNBOUNDED_SPP = 1 << 16
 #: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
 #: reset, image write) outweighs the samples saved.
 MIN_TILE_SIZE = 8
@@ -29,7 +32,8 @@ class RenderOptions:
     Parameters
     ----------
     max_spp
-        The ceiling: samples per pixel where the director map is 1 (the gold standard's count).
+        The ceiling: samples per pixel where the director map is 1 (the gold standard's count);
+        the most any pixel of a guided render gets (``UNBOUNDED_SPP``: no ceiling asked for).
     min_spp
         The floor: every pixel gets at least this many samples (a pixel with none is black).
     tile_size
@@ -116,6 +120,11 @@ class RenderOptions:
             frame_size(*self.resolution, Field("resolution"))
         check_estimator(self.estimator, self.step_rate)
         return self
+
+    @property
+    def has_ceiling(self) -> bool:
+        """False for a guided render asked for no ceiling (``UNBOUNDED_SPP``)."""
+        return self.max_spp < UNBOUNDED_SPP
 
     def volume_estimator(self) -> EstimatorChoice:
         """What the renders use for volumes: auto's choice, or the fixed one asked for."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from ..errors import SettingError
 from ..maps.options import MapOptions
 from .guided_plan import GuidedOptions
-from .render_options import RenderOptions
+from .render_options import UNBOUNDED_SPP, RenderOptions
 
 #: Every render mode: the gold standard, the paper's selective modes, the baselines and the
 #: time-budgeted sampler.
@@ -79,6 +79,9 @@ class RenderRequest:
                 raise SettingError("{mode} needs {time_budget.name} SECONDS", mode=self.mode,
                                    time_budget=None)
             self.guided.check()
+            if self.options.max_spp > UNBOUNDED_SPP:
+                raise SettingError(f"{{max_spp.name}} must be between 1 and {UNBOUNDED_SPP} "
+                                   "(got {max_spp.value})", max_spp=self.options.max_spp)
         elif self.guided is not None:
             raise SettingError("{time_budget.name} is for {mode.name} guided "
                                "(use {seconds.name} with {mode})",
@@ -107,15 +110,14 @@ class RenderRequest:
         if self.mode == "uniform" and self.spp:
             return float(self.spp)
         if self.mode == "guided":
-            ceiling = self.guided.max_spp if self.guided is not None else None
-            return float(ceiling) if ceiling else float(GUIDED_SPP)
+            return float(self.options.max_spp if self.options.has_ceiling else GUIDED_SPP)
         return float(self.options.max_spp)
 
     @property
     def unbounded(self) -> bool:
         """A guided render without a ceiling (its samples' preview scales to the most any
         pixel got)."""
-        return self.mode == "guided" and self.guided is not None and self.guided.max_spp is None
+        return self.mode == "guided" and not self.options.has_ceiling
 
     def record_budget(self, stats) -> None:
         """Record in the run's ``RenderStats`` where its budget came from."""

@@ -135,24 +135,24 @@ def add_guided_arguments(parser, budget_required: bool = False) -> None:
 
 
 def guided_options_from_args(args):
-    """``GuidedOptions`` from the guided arguments, --max-spp and --tile-size, checked."""
+    """``GuidedOptions`` from the guided arguments, checked (its ceiling and tile size are
+    the render options')."""
     from ...core.sampling.guided_plan import GuidedOptions
 
     if args.time_budget is None:
         raise InputError("--mode guided needs --time-budget SECONDS")
-    return GuidedOptions(time_budget=args.time_budget, max_spp=args.max_spp,
-                         pilot_fraction=args.pilot_fraction, exponent=args.guided_exponent,
-                         importance=args.importance, tile_size=args.tile_size,
+    return GuidedOptions(time_budget=args.time_budget, pilot_fraction=args.pilot_fraction,
+                         exponent=args.guided_exponent, importance=args.importance,
                          level_ratio=args.level_ratio).check()
 
 
-def guided_render_options(guided, seed: int, resolution):
-    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm): its
-    ceiling as max_spp (what the statistics report), its tile size, the seed and resolution,
-    and guided's volume estimator (auto)."""
-    from ...core.sampling.render_options import RenderOptions
+def guided_render_options(args, resolution):
+    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm):
+    --max-spp as its ceiling (none given, or 0: ``UNBOUNDED_SPP``), --tile-size, --seed,
+    the resolution, and guided's volume estimator (auto)."""
+    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
-    return RenderOptions(max_spp=guided.ceiling, tile_size=guided.tile_size, seed=seed,
+    return RenderOptions(max_spp=args.max_spp or UNBOUNDED_SPP, tile_size=args.tile_size, seed=args.seed,
                          resolution=resolution, estimator="auto").check()
 
 
@@ -161,8 +161,7 @@ def render_options_from_args(args):
 
     Every mode but guided needs --max-spp; guided without it has no ceiling but
     ``UNBOUNDED_SPP``."""
-    from ...core.sampling.guided_plan import UNBOUNDED_SPP
-    from ...core.sampling.render_options import RenderOptions
+    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
     max_spp, mode = args.max_spp, getattr(args, "mode", None)
     if max_spp is None:

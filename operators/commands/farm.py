@@ -115,7 +115,7 @@ def run(args) -> int:
     resolution = parse_resolution(args.resolution)
     guided, tasks_per_frame = _guided_or_tiles(args)
     if guided is not None:
-        guided_render_options(guided, args.seed, resolution)                # checked now, set later
+        guided_render_options(args, resolution)                # checked now, set later
     else:
         tile_options(args, args.max_spp or max(1, args.min_spp), resolution)     # checked now, set later
     bundle = check_bundle_folder(args.bundle)
@@ -136,9 +136,9 @@ def run(args) -> int:
     if frames is None:
         frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
     if guided is not None:
-        options = guided_render_options(guided, args.seed, resolution or render_size(scene))
+        options = guided_render_options(args, resolution or render_size(scene))
         what = (f"guided within {guided.time_budget:g} s per frame "
-                + ("without a ceiling" if guided.max_spp is None else f"up to {guided.max_spp} spp")
+                + (f"up to {options.max_spp} spp" if options.has_ceiling else "without a ceiling")
                 + f", importance {guided.importance}")
     else:
         max_spp = args.max_spp if args.max_spp is not None else int(scene.cycles.samples)

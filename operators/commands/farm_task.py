@@ -125,12 +125,13 @@ def _chunk(frames: tuple[int, ...]) -> str:
 
 
 def check(args) -> None:
-    """A guided task's options taken together (``GuidedOptions.check``), before anything loads;
-    --max-spp 0 is the job template's "no ceiling"."""
+    """A guided task's options taken together (``GuidedOptions.check`` and its render options,
+    --max-spp 0 being the job template's "no ceiling"), before anything loads."""
     if args.step == "guided":
-        if args.max_spp == 0:
-            args.max_spp = None
-        guided_options_from_args(args)
+        from ...core.sampling.render_request import RenderRequest
+
+        RenderRequest("guided", guided_render_options(args, parse_resolution(args.resolution)),
+                      guided=guided_options_from_args(args)).check()
 
 
 def _map_arguments(parser) -> None:
@@ -228,8 +229,8 @@ def _guided(args) -> int:
     from ...core.maps.xmap import XMapWarning
 
     frames = _frames(args)
-    guided = guided_options_from_args(args)           # --max-spp 0 became None in check()
-    options = guided_render_options(guided, args.seed, parse_resolution(args.resolution))
+    guided = guided_options_from_args(args)
+    options = guided_render_options(args, parse_resolution(args.resolution))   # --max-spp 0: none
     map_options = _map_options(args)
     report = TaskProgress()
     report.status(f"{_chunk(frames)}: guided render within {guided.time_budget:g} s a frame")
