@@ -15,7 +15,7 @@ import numpy as np
 from ..core.progress import ProgressCallback
 from ..core.sampling.guided_plan import SequenceBudget
 from ..core.sampling.render_options import RenderOptions
-from ..core.sampling.render_request import SELECTIVE_MODES, RenderRequest
+from ..core.sampling.render_request import RenderRequest
 from .cycles import selective_render as sr
 from .frame_jobs import (FrameJob, estimated_frame, guided_frame, map_frame, selective_frame,
                          single_render_frame)
@@ -40,28 +40,36 @@ def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = Non
         steps inside); None: the job announces the render as a step instead.
     """
     request.check()
-    mode = request.mode
+    traits = request.traits
 
     def make(chosen: RenderOptions) -> FrameJob:
-        if mode in SELECTIVE_MODES:
-            label = request.label or mode
+        if traits.director_map:
+            label = request.label or request.mode
             if director_map is not None:
                 return map_frame(director_map, chosen, label, map_seconds)
-            return selective_frame(request.map_options, chosen, mode, cache_dir, label)
-        if mode == "guided":
+            return selective_frame(request.map_options, chosen, request.mode, cache_dir, label)
+        if traits.time_budget:
             return guided_frame(request.guided, request.map_options, chosen, cache_dir, sequence)
-        return single_render_frame(lambda scene: _baseline(scene, request, chosen, progress), mode,
+        render = _BASELINES[request.mode]
+        return single_render_frame(lambda scene: render(scene, request, chosen, progress), request.mode,
                                    announce=progress is None)
 
     return estimated_frame(make, request.options, request.estimator_spp)
 
 
-def _baseline(scene, request: RenderRequest, options: RenderOptions, progress):
-    """One gold, uniform or adaptive render of the scene at its current frame."""
-    if request.mode == "gold":
-        return sr.render_gold(scene, options, progress=progress)
-    if request.mode == "uniform":
-        return sr.render_uniform(scene, options, spp=request.spp, seconds=request.seconds, progress=progress)
+def _gold(scene, request: RenderRequest, options: RenderOptions, progress):
+    return sr.render_gold(scene, options, progress=progress)
+
+
+def _uniform(scene, request: RenderRequest, options: RenderOptions, progress):
+    return sr.render_uniform(scene, options, spp=request.spp, seconds=request.seconds, progress=progress)
+
+
+def _adaptive(scene, request: RenderRequest, options: RenderOptions, progress):
     threshold = request.noise_threshold if request.noise_threshold is not None \
         else sr.CYCLES_DEFAULT_NOISE_THRESHOLD
     return sr.render_adaptive(scene, options, request.seconds, threshold, progress=progress)
+
+
+#: The modes rendered by one ordinary Cycles render of the scene at its current frame.
+_BASELINES = {"gold": _gold, "uniform": _uniform, "adaptive": _adaptive}

@@ -11,7 +11,8 @@ from xsl_render.core.errors import SettingError
 from xsl_render.core.maps.options import MapOptions
 from xsl_render.core.sampling.guided_plan import GuidedOptions
 from xsl_render.core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
-from xsl_render.core.sampling.render_request import GUIDED_SPP, MODES, RenderRequest
+from xsl_render.core.sampling.render_request import (GUIDED_SPP, MODE_TRAITS, MODES, SELECTIVE_MODES,
+                                                     RenderRequest)
 
 OPTIONS = RenderOptions(max_spp=64)
 UNBOUNDED = RenderOptions(max_spp=UNBOUNDED_SPP)
@@ -47,11 +48,14 @@ def test_requests_each_mode_takes(request_, spp):
     (RenderRequest("uniform", OPTIONS, spp=8, seconds=2.0), "--mode uniform needs either --spp or --equal-time"),
     (RenderRequest("uniform", OPTIONS, seconds=float("nan")), "--equal-time must be positive"),
     (RenderRequest("adaptive", OPTIONS, seconds=-1.0), "--equal-time must be positive"),
+    (RenderRequest("xsl", OPTIONS, seconds=2.0), "--equal-time is for --mode uniform and adaptive"),
+    (RenderRequest("guided", RenderOptions(max_spp=70000), guided=GUIDED), "--max-spp must be between 1 and 65536"),
     (RenderRequest("adaptive", OPTIONS, noise_threshold=0.0), r"--noise-threshold must be in \(0, 1\]"),
     (RenderRequest("uniform", RenderOptions(max_spp=4, min_spp=8), spp=2), "--min-spp 8 is larger than --max-spp 4"),
     (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=0.0)), "--time-budget must be a positive"),
 ])
 def test_impossible_requests_are_refused_naming_the_setting(request_, message):
+    """(Every rule reads the mode's ``MODE_TRAITS``, not its name.)"""
     with refused_in_flags(message) as refused:
         request_.check()
     assert isinstance(refused.value, SettingError)
@@ -65,3 +69,9 @@ def test_the_budget_source_is_recorded():
     assert (stats.budget_from, stats.budget_mean_spp) == ("run.json", 11.6)
     RenderRequest("gold", OPTIONS).record_budget(stats)
     assert (stats.budget_from, stats.budget_mean_spp) == (None, None)
+
+
+def test_every_mode_has_its_traits():
+    assert set(MODE_TRAITS) == set(MODES) and SELECTIVE_MODES == ("xs", "xsl")
+    assert [mode for mode in MODES if MODE_TRAITS[mode].default_estimator == "auto"] == ["guided"]
+    assert {MODE_TRAITS[mode].budget_from for mode in MODES} == {None, "spp", "seconds"}

@@ -14,12 +14,14 @@ from ..frames import frame_expression
 from ..maps.options import MapOptions
 from ..sampling.guided_plan import MAX_TIME_BUDGET, GuidedOptions
 from ..sampling.render_options import RenderOptions
+from ..sampling.render_request import MODE_TRAITS, SELECTIVE_MODES, ModeTraits, RenderRequest  # noqa: F401
 from .task_groups import check_groups
 from .worker_environment import WorkerSetup
 
-SELECTIVE_MODES = ("xs", "xsl")
-GUIDED = "guided"
-MODES = (*SELECTIVE_MODES, GUIDED)
+#: The modes a farm renders: those that plan their frame themselves (a selective one's tiles
+#: are tasks of their own; a time budget's frame is one task).
+MODES = tuple(mode for mode, traits in MODE_TRAITS.items() if traits.director_map or traits.time_budget)
+GUIDED = next(mode for mode in MODES if MODE_TRAITS[mode].time_budget)
 #: MaxSpp of a guided job without a per-pixel ceiling. An INT parameter cannot be empty, and
 #: 0 samples per pixel means nothing else, so the farm's form can still check the number.
 NO_CEILING = 0
@@ -89,9 +91,13 @@ class FarmJob:
         frame's allowance times ``frames_per_task`` (a chunk of that many frames)."""
         if self.task_timeout is not None:
             return self.task_timeout
-        if self.mode == GUIDED and self.guided is not None:
+        if self.traits.time_budget and self.guided is not None:
             return guided_timeout(self.guided.time_budget) * self.frames_per_task
         return DEFAULT_TASK_TIMEOUT * self.frames_per_task
+
+    @property
+    def traits(self) -> ModeTraits:
+        return MODE_TRAITS.get(self.mode, ModeTraits())
 
     def check(self) -> "FarmJob":
         if self.mode not in MODES:
@@ -99,16 +105,9 @@ class FarmJob:
                                "(got '{mode.value}')", mode=self.mode)
         if self.options.resolution is None:
             raise InputError("a farm job needs its resolution fixed")
-        self.options.check()
         width, height = self.options.resolution
-        if self.mode == GUIDED:
-            if self.guided is None:
-                raise SettingError("{mode} needs {time_budget.name} SECONDS", mode=self.mode,
-                                   time_budget=None)
-            self.guided.check()
-        elif self.guided is not None:
-            raise SettingError("{time_budget.name} is for {mode.name} guided (got {mode})",
-                               time_budget=self.guided.time_budget, mode=self.mode)
+        # The render each task makes, checked as every front end's is.
+        RenderRequest(self.mode, self.options, guided=self.guided, map_options=self.map_options).check()
         self.options.check_frame(width, height)
         self.map_options.validate()
         check_groups(self.tasks_per_frame)

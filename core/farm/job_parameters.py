@@ -14,7 +14,7 @@ from ..maps.director import OPERATORS
 from ..maps.options import MapOptions
 from ..sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET
 from ..sampling.render_options import MIN_TILE_SIZE, UNBOUNDED_SPP
-from .farm_job import (DEVICES, GUIDED, MAX_FRAMES_PER_TASK, MIN_FARM_TIME_BUDGET, NO_CEILING,
+from .farm_job import (DEVICES, MAX_FRAMES_PER_TASK, MIN_FARM_TIME_BUDGET, NO_CEILING,
                        SELECTIVE_MODES, FarmJob)
 from .task_groups import MAX_GROUPS
 from .worker_environment import worker_parameters
@@ -185,7 +185,7 @@ def _guided_parameters(job: FarmJob) -> list[dict]:
 def parameters(job: FarmJob) -> list[dict]:
     """Job parameter definitions with their values (``value``) and the
     ``xsl-render farm-task`` option each one feeds (``flag``; None: the template uses it)."""
-    return _guided_parameters(job) if job.mode == GUIDED else _selective_parameters(job)
+    return _guided_parameters(job) if job.traits.time_budget else _selective_parameters(job)
 
 
 def definition(parameter: dict) -> dict:

@@ -103,7 +103,7 @@ def job_template(job: FarmJob) -> dict:
     """The job template as plain data (dump it as YAML or JSON)."""
     parameters = checked_parameters(job)
     frame = ["--frames", "{{Task.Param.Frame}}", "--output", "{{Param.OutputDir}}"]
-    if job.mode == GUIDED:
+    if job.traits.time_budget:
         return _job(job, parameters, "xsl-render guided {{Param.SceneName}} frames {{Param.Frames}}",
                     "Rendering of participating media with Blender Cycles within a time budget per "
                     "frame: a pilot pass, the rest of the budget where the denoised frame keeps its "

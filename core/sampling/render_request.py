@@ -16,11 +16,53 @@ from ..maps.options import MapOptions
 from .guided_plan import GuidedOptions
 from .render_options import UNBOUNDED_SPP, RenderOptions
 
+@dataclass(frozen=True)
+class ModeTraits:
+    """What a render mode takes and does. The request's check, the command line, the panel
+    and the farm ask ``MODE_TRAITS`` instead of switching on a mode's name; only the
+    dispatcher (``addon.render_dispatch``) turns a mode into its renders.
+
+    Parameters
+    ----------
+    director_map
+        Driven by a director map (xs, xsl): its tiles must fit the frame, its map may be given
+        as a file, the maps it computes may be saved.
+    time_budget
+        Renders within a time budget of its own (guided: ``GuidedOptions``), with an optional
+        ceiling, ``auto``'s volume estimator by default and an importance map computed inside.
+    spp, seconds
+        Takes a sample count (uniform), a wall time to render for (uniform, adaptive).
+    budget_from
+        What another run's stats give it as its budget: "spp" (its mean samples: uniform) or
+        "seconds" (its wall time less its denoising: adaptive); None: nothing.
+    """
+
+    director_map: bool = False
+    time_budget: bool = False
+    spp: bool = False
+    seconds: bool = False
+    budget_from: str | None = None
+
+    @property
+    def default_estimator(self) -> str:
+        """A time budget is spent best where the medium's estimate costs least (``auto``);
+        every other mode renders what the scene asks for."""
+        return "auto" if self.time_budget else "scene"
+
+
 #: Every render mode: the gold standard, the paper's selective modes, the baselines and the
 #: time-budgeted sampler.
-MODES = ("gold", "xs", "xsl", "uniform", "adaptive", "guided")
+MODE_TRAITS = {
+    "gold": ModeTraits(),
+    "xs": ModeTraits(director_map=True),
+    "xsl": ModeTraits(director_map=True),
+    "uniform": ModeTraits(spp=True, seconds=True, budget_from="spp"),
+    "adaptive": ModeTraits(seconds=True, budget_from="seconds"),
+    "guided": ModeTraits(time_budget=True),
+}
+MODES = tuple(MODE_TRAITS)
 #: Modes driven by a director map.
-SELECTIVE_MODES = ("xs", "xsl")
+SELECTIVE_MODES = tuple(mode for mode, traits in MODE_TRAITS.items() if traits.director_map)
 #: The samples per pixel ``auto`` assumes for a guided render without a ceiling: its sample
 #: count is only known after the pilot, which already renders with the estimator (changing
 #: it afterwards would sync the scene again). 16 is what the measured budgets gave.
@@ -68,13 +110,18 @@ class RenderRequest:
     budget_mean_spp: float | None = None
     label: str | None = None
 
+    @property
+    def traits(self) -> ModeTraits:
+        return MODE_TRAITS[self.mode]
+
     def check(self) -> "RenderRequest":
         """Raise a SettingError naming the first setting the mode cannot take; return self."""
-        if self.mode not in MODES:
+        if self.mode not in MODE_TRAITS:
             raise SettingError(f"{{mode.name}} must be one of {', '.join(MODES)} (got '{{mode.value}}')",
                                mode=self.mode)
+        traits = self.traits
         self.options.check()
-        if self.mode == "guided":
+        if traits.time_budget:
             if self.guided is None:
                 raise SettingError("{mode} needs {time_budget.name} SECONDS", mode=self.mode,
                                    time_budget=None)
@@ -83,18 +130,23 @@ class RenderRequest:
                 raise SettingError(f"{{max_spp.name}} must be between 1 and {UNBOUNDED_SPP} "
                                    "(got {max_spp.value})", max_spp=self.options.max_spp)
         elif self.guided is not None:
-            raise SettingError("{time_budget.name} is for {mode.name} guided "
-                               "(use {seconds.name} with {mode})",
+            instead = " (use {seconds.name} with {mode})" if traits.seconds else " (got {mode})"
+            raise SettingError("{time_budget.name} is for {mode.name} guided" + instead,
                                time_budget=self.guided.time_budget, mode=self.mode, seconds=None)
         if self.spp is not None:
-            if self.mode != "uniform":
+            if not traits.spp:
                 raise SettingError("{spp.name} is for {mode.name} uniform", spp=self.spp, mode=self.mode)
             if not 1 <= self.spp <= self.options.max_spp:
                 raise SettingError("{spp} is above {max_spp}, the ceiling of every mode",
                                    spp=self.spp, max_spp=self.options.max_spp)
-        if self.seconds is not None and not (math.isfinite(self.seconds) and self.seconds > 0.0):
-            raise SettingError("{seconds.name} must be positive (got {seconds.value:g})", seconds=self.seconds)
-        if self.mode == "uniform" and (self.spp is None) == (self.seconds is None):
+        if self.seconds is not None:
+            if not (math.isfinite(self.seconds) and self.seconds > 0.0):
+                raise SettingError("{seconds.name} must be positive (got {seconds.value:g})",
+                                   seconds=self.seconds)
+            if not traits.seconds:
+                raise SettingError("{seconds.name} is for {mode.name} uniform and adaptive",
+                                   seconds=self.seconds, mode=self.mode)
+        if traits.spp and (self.spp is None) == (self.seconds is None):
             raise SettingError("{mode} needs either {spp.name} or {seconds.name}", mode=self.mode,
                                spp=self.spp, seconds=self.seconds)
         if self.noise_threshold is not None and not 0.0 < self.noise_threshold <= 1.0:
@@ -105,19 +157,20 @@ class RenderRequest:
     @property
     def estimator_spp(self) -> float:
         """The samples per pixel the run gives its pixels at most, which sets how much bias
-        the estimator ``auto`` tolerates: uniform's count when it has one, guided's ceiling
-        (or ``GUIDED_SPP``), the ceiling otherwise (xs and xsl give some pixels that many)."""
-        if self.mode == "uniform" and self.spp:
+        the estimator ``auto`` tolerates: its sample count when it has one (uniform), a time
+        budget's ceiling (or ``GUIDED_SPP`` without one), the ceiling otherwise (xs and xsl
+        give some pixels that many)."""
+        if self.spp:
             return float(self.spp)
-        if self.mode == "guided":
-            return float(self.options.max_spp if self.options.has_ceiling else GUIDED_SPP)
+        if self.traits.time_budget and not self.options.has_ceiling:
+            return float(GUIDED_SPP)
         return float(self.options.max_spp)
 
     @property
     def unbounded(self) -> bool:
         """A guided render without a ceiling (its samples' preview scales to the most any
         pixel got)."""
-        return self.mode == "guided" and not self.options.has_ceiling
+        return self.traits.time_budget and not self.options.has_ceiling
 
     def record_budget(self, stats) -> None:
         """Record in the run's ``RenderStats`` where its budget came from."""

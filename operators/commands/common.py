@@ -162,10 +162,11 @@ def render_options_from_args(args):
     Every mode but guided needs --max-spp; guided without it has no ceiling but
     ``UNBOUNDED_SPP``."""
     from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
+    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
 
     max_spp, mode = args.max_spp, getattr(args, "mode", None)
     if max_spp is None:
-        if mode != "guided":
+        if not MODE_TRAITS.get(mode, ModeTraits()).time_budget:
             raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
         max_spp = UNBOUNDED_SPP
     return RenderOptions(
@@ -180,10 +181,12 @@ def estimator_from_args(args) -> str:
     """--estimator, or its default: auto for guided (a time budget is spent best where the
     medium's estimate costs least), the scene's own settings for every other mode (the
     baselines and the paper's modes render what the scene asks for)."""
+    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
+
     chosen = getattr(args, "estimator", None)
     if chosen is not None:
         return chosen
-    return "auto" if getattr(args, "mode", None) == "guided" else "scene"
+    return MODE_TRAITS.get(getattr(args, "mode", None), ModeTraits()).default_estimator
 
 
 def map_options_from_args(args) -> MapOptions:

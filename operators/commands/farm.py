@@ -186,8 +186,9 @@ def _guided_or_tiles(args):
     """(GuidedOptions, 1) for --mode guided, (None, tile tasks per frame) for xs and xsl;
     InputError for an option of the other kind."""
     from ...core.farm.task_groups import check_groups
+    from ...core.sampling.render_request import MODE_TRAITS
 
-    if args.mode == "guided":
+    if MODE_TRAITS[args.mode].time_budget:
         if args.tasks_per_frame is not None:
             raise InputError("--tasks-per-frame is for xs and xsl: a guided frame is one task")
         return guided_options_from_args(args), 1

@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 from ...core.checks import separate_files
@@ -86,14 +85,19 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
     from ...core.maps.files import map_set_paths
     from .render_animation import maps_folder
 
+    from ...core.sampling.render_request import MODE_TRAITS
+
+    traits = MODE_TRAITS[args.mode]
     inputs = {"--maps' map": _map_file(args)} if args.maps else {}
-    # --save-maps keeps maps computed here: none for a baseline, or a map given.
-    save_maps = args.save_maps if args.mode in ("xs", "xsl", "guided") and not (args.map or args.maps) else None
+    # --save-maps keeps maps computed here (a frame range's ray cache too): none for a
+    # baseline, or a map given.
+    computes_maps = traits.director_map or traits.time_budget
+    save_maps = args.save_maps if computes_maps and not (args.map or args.maps) else None
     frames = _frames(args)
     outputs = {}
     if frames is None:
         outputs.update(render_output_paths(out or args.out, args.stats))
-        if save_maps and args.mode != "guided":
+        if save_maps and traits.director_map:
             outputs.update({f"--save-maps' {name}": path for name, path in map_set_paths(save_maps).items()})
         return inputs, outputs
     for frame in frames:
@@ -148,51 +152,57 @@ def _render_budget(budget, path: str) -> float:
 
 def _request(args, options) -> tuple:
     """The ``RenderRequest`` of the command line (checked), and the director map file an
-    xs or xsl render reads instead of computing its maps (None without --map/--maps)."""
-    from ...core.sampling.guided_plan import GuidedOptions
-    from ...core.sampling.render_request import RenderRequest
+    xs or xsl render reads instead of computing its maps (None without --map/--maps).
 
-    if args.mode == "guided":
-        return RenderRequest("guided", options, guided=guided_options_from_args(args),
-                             map_options=map_options_from_args(args)).check(), None
-    if args.time_budget is not None:
+    Every flag goes into the request as given; what a mode takes is the request's own
+    check (``MODE_TRAITS``). A stats file gives the budget its mode is measured by."""
+    from ...core.sampling.guided_plan import GuidedOptions
+    from ...core.sampling.render_request import MODE_TRAITS, RenderRequest
+
+    traits = MODE_TRAITS[args.mode]
+    if traits.time_budget:
+        guided = guided_options_from_args(args)
+    elif args.time_budget is not None:
         # Refused by the request itself ("is for --mode guided"), before anything is read.
         RenderRequest(args.mode, options, guided=GuidedOptions(time_budget=args.time_budget)).check()
-    stats = _read_budget(args.budget_from) if args.budget_from else None
-    request = RenderRequest(args.mode, options, noise_threshold=args.noise_threshold)
-    if args.mode in ("xs", "xsl"):
-        if args.map or args.maps:
-            return request.check(), Path(args.map) if args.map else _map_file(args)
-        return replace(request, map_options=map_options_from_args(args)).check(), None
-    if args.mode == "uniform":
-        if args.equal_time is not None:
-            if args.equal_time < 0:
-                if stats is None:
-                    raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-                return replace(request, seconds=_render_budget(stats, args.budget_from),
-                               budget_from=args.budget_from).check(), None
-            if args.equal_time <= 0:
-                raise InputError(f"--equal-time must be positive (got {args.equal_time:g})")
-            return replace(request, seconds=args.equal_time).check(), None
-        if args.spp is not None:
-            return replace(request, spp=args.spp).check(), None
-        if stats is not None:
-            return replace(request, spp=max(1, int(round(stats.mean_spp))),
-                           budget_from=args.budget_from, budget_mean_spp=stats.mean_spp).check(), None
-        raise InputError("--mode uniform needs --spp N, --budget-from STATS.json or --equal-time SECONDS")
-    if args.mode == "adaptive":
-        if args.equal_time is not None and args.equal_time > 0:
-            return replace(request, seconds=args.equal_time).check(), None
-        if stats is not None:
-            return replace(request, seconds=_render_budget(stats, args.budget_from),
-                           budget_from=args.budget_from).check(), None
-        raise InputError("--mode adaptive needs --budget-from STATS.json or --equal-time SECONDS")
-    return request.check(), None
+    else:
+        guided = None
+    map_file = None
+    if traits.director_map and (args.map or args.maps):
+        map_file = Path(args.map) if args.map else _map_file(args)
+    computes_maps = (traits.director_map and map_file is None) or traits.time_budget
+    if args.budget_from and not traits.budget_from:
+        raise InputError(f"--budget-from is for --mode uniform and adaptive (got --mode {args.mode})")
+    spp, seconds, mean_spp, budget_from = args.spp, None, None, None
+    recorded = _read_budget(args.budget_from) if args.budget_from else None
+    if args.equal_time is not None and args.equal_time >= 0:
+        if args.equal_time == 0:
+            raise InputError("--equal-time must be positive (got 0)")
+        seconds = args.equal_time
+    elif args.equal_time is not None:           # --equal-time without SECONDS: the stats file's
+        if recorded is None:
+            raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
+        seconds, budget_from = _render_budget(recorded, args.budget_from), args.budget_from
+    elif recorded is not None and spp is None:
+        budget_from = args.budget_from
+        if traits.budget_from == "spp":
+            spp, mean_spp = max(1, int(round(recorded.mean_spp))), recorded.mean_spp
+        else:
+            seconds = _render_budget(recorded, args.budget_from)
+    if traits.budget_from and spp is None and seconds is None:
+        needs = (["--spp N"] if traits.spp else []) + ["--budget-from STATS.json"]
+        raise InputError(f"--mode {args.mode} needs {', '.join(needs)} or --equal-time SECONDS")
+    request = RenderRequest(args.mode, options, spp=spp, seconds=seconds, noise_threshold=args.noise_threshold,
+                            guided=guided, map_options=map_options_from_args(args) if computes_maps else None,
+                            budget_from=budget_from, budget_mean_spp=mean_spp)
+    return request.check(), map_file
 
 
 def _map_file(args) -> Path:
     """The map a selective render reads from --maps DIR: DIR/xs.exr or DIR/xsl.exr."""
-    return Path(args.maps) / f"{args.mode if args.mode in ('xs', 'xsl') else 'xsl'}.exr"
+    from ...core.sampling.render_request import MODE_TRAITS
+
+    return Path(args.maps) / f"{args.mode if MODE_TRAITS[args.mode].director_map else 'xsl'}.exr"
 
 
 def _read_map(path: Path):

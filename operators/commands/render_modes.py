@@ -11,10 +11,11 @@ def check_scene(scene, options, mode: str) -> None:
     """What only the opened scene can tell about the inputs, before any work (maps, renders,
     a progress bar): it has a camera, and (xs, xsl) the tiles fit its frame."""
     from ...addon.scene.probe import camera_model, render_size
+    from ...core.sampling.render_request import MODE_TRAITS
 
     camera_model(scene)
     width, height = options.resolution or render_size(scene)
-    if mode in ("xs", "xsl"):
+    if MODE_TRAITS[mode].director_map:
         options.check_frame(width, height)
 
 

@@ -164,6 +164,11 @@ CASES = [
     ("render-maps-file", RX + ["--maps", "{file}"] + OUT, "is a file, not a folder"),
     ("render-maps-empty", RX + ["--maps", "{dir}"] + OUT, "no such director map"),
     ("render-save-maps-file", RX + ["--save-maps", "{file}"] + OUT, "is a file, not a folder"),
+    # What a mode does not take is refused, not ignored (MODE_TRAITS).
+    ("render-budget-from-gold", RG + ["--budget-from", "{budget_nan}"] + OUT,
+     "--budget-from is for --mode uniform and adaptive (got --mode gold)"),
+    ("render-equal-time-xsl", RX + ["--equal-time", "3"] + OUT, "--equal-time is for --mode uniform and adaptive"),
+    ("render-spp-guided", RGU + ["--spp", "4"] + OUT, "--spp is for --mode uniform"),
     ("render-budget-missing", R + ["--mode", "uniform", "--max-spp", "4", "--budget-from", "{missing}"] + OUT,
      "no such stats file"),
     ("render-budget-nan", R + ["--mode", "uniform", "--max-spp", "4", "--budget-from", "{budget_nan}"] + OUT,
