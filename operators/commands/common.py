@@ -1,5 +1,6 @@
-"""Options several commands share: the scene to open, resolution and frame, map options,
-tile options."""
+"""Options several commands share, as flags: the scene to open, resolution and frame, map
+options, tile options, the estimator, guided's budget. (What they become, checked:
+``options_from_args.py``.)"""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +9,6 @@ import warnings
 from contextlib import contextmanager
 
 from ...core.checks import MAX_SIDE
-from ...core.errors import InputError
 from ...core.maps.options import MAX_N, MAX_SIGMA_BASE, MapOptions
 from ...core.sampling.render_options import MIN_TILE_SIZE
 from . import argtypes
@@ -132,67 +132,6 @@ def add_guided_arguments(parser, budget_required: bool = False) -> None:
     guided.add_argument("--level-ratio", type=argtypes.number(above=1.0, hi=4.0), default=defaults.level_ratio,
                         help="guided: sample counts are rounded to powers of this ratio "
                              f"(default {defaults.level_ratio})")
-
-
-def guided_options_from_args(args):
-    """``GuidedOptions`` from the guided arguments, checked (its ceiling and tile size are
-    the render options')."""
-    from ...core.sampling.guided_plan import GuidedOptions
-
-    if args.time_budget is None:
-        raise InputError("--mode guided needs --time-budget SECONDS")
-    return GuidedOptions(time_budget=args.time_budget, pilot_fraction=args.pilot_fraction,
-                         exponent=args.guided_exponent, importance=args.importance,
-                         level_ratio=args.level_ratio).check()
-
-
-def guided_render_options(args, resolution):
-    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm):
-    --max-spp as its ceiling (none given, or 0: ``UNBOUNDED_SPP``), --tile-size, --seed,
-    the resolution, and guided's volume estimator (auto)."""
-    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
-
-    return RenderOptions(max_spp=args.max_spp or UNBOUNDED_SPP, tile_size=args.tile_size, seed=args.seed,
-                         resolution=resolution, estimator="auto").check()
-
-
-def render_options_from_args(args):
-    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked.
-
-    Every mode but guided needs --max-spp; guided without it has no ceiling but
-    ``UNBOUNDED_SPP``."""
-    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
-    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
-
-    max_spp, mode = args.max_spp, getattr(args, "mode", None)
-    if max_spp is None:
-        if not MODE_TRAITS.get(mode, ModeTraits()).time_budget:
-            raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
-        max_spp = UNBOUNDED_SPP
-    return RenderOptions(
-        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
-        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
-        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
-        resolution=parse_resolution(args.resolution), denoise=args.denoise,
-        estimator=estimator_from_args(args), step_rate=getattr(args, "step_rate", None)).check()
-
-
-def estimator_from_args(args) -> str:
-    """--estimator, or its default: auto for guided (a time budget is spent best where the
-    medium's estimate costs least), the scene's own settings for every other mode (the
-    baselines and the paper's modes render what the scene asks for)."""
-    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
-
-    chosen = getattr(args, "estimator", None)
-    if chosen is not None:
-        return chosen
-    return MODE_TRAITS.get(getattr(args, "mode", None), ModeTraits()).default_estimator
-
-
-def map_options_from_args(args) -> MapOptions:
-    return MapOptions(wx=args.wx, ws=args.ws, xs_op=args.xs_op, wxs=args.wxs, wl=args.wl,
-                      xsl_op=args.xsl_op, light_n=args.light_n,
-                      light_sigma_base=args.light_sigma_base, minbound=args.minbound).validate()
 
 
 @contextmanager

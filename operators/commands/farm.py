@@ -21,9 +21,8 @@ from ...core.farm.farm_job import DEFAULT_FRAMES_PER_TASK, MAX_FRAMES_PER_TASK
 from ...core.farm.worker_environment import WorkerSetup
 from ...core.farm.worker_setup import SETUPS
 from . import argtypes
-from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
-                     guided_options_from_args, guided_render_options, map_options_from_args,
-                     parse_resolution)
+from .common import add_guided_arguments, add_map_arguments, add_tile_arguments, parse_resolution
+from .options_from_args import guided_options_from_args, guided_render_options, map_options_from_args
 
 NAME = "farm"
 HELP = "write an Open Job Description job bundle that renders the scene on a render farm"

@@ -36,9 +36,10 @@ from pathlib import Path
 from ...core.farm.frame_outputs import FrameSummary
 from ...core.farm.task_progress import TaskProgress
 from . import argtypes
-from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments,
-                     guided_options_from_args, guided_render_options, map_options_from_args,
-                     parse_resolution, render_options_from_args, warnings_as_lines)
+from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments, parse_resolution,
+                     warnings_as_lines)
+from .options_from_args import (guided_options_from_args, guided_render_options, map_options_from_args,
+                                render_options_from_args)
 
 NAME = "farm-task"
 HELP = ("run one task of a farm job (maps, tiles or composite of a frame, or a guided frame); "

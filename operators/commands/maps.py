@@ -9,8 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from . import argtypes
-from .common import (add_map_arguments, add_scene_arguments, map_options_from_args,
-                     parse_resolution, warnings_as_lines)
+from .common import add_map_arguments, add_scene_arguments, parse_resolution, warnings_as_lines
+from .options_from_args import map_options_from_args
 
 NAME = "maps"
 HELP = "compute the Z, X, snapshot, S, L, XS and XSL maps of the active camera"

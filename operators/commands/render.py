@@ -9,7 +9,6 @@ FILE's name becomes the frame number; ``--frames START-END`` renders an animatio
 """
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -21,9 +20,8 @@ from ...core.sampling.render_files import render_output_paths, write_render_outp
 from . import argtypes
 from .argtypes import declared_files
 from .common import (add_estimator_arguments, add_guided_arguments, add_map_arguments,
-                     add_scene_arguments, add_tile_arguments,
-                     guided_options_from_args, map_options_from_args, render_options_from_args,
-                     warnings_as_lines)
+                     add_scene_arguments, add_tile_arguments, warnings_as_lines)
+from .options_from_args import map_file_of, render_request_from_args
 from .render_modes import check_scene, spp_scale, summary_line
 
 NAME = "render"
@@ -83,12 +81,11 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
     --save-maps. ``out``: the image's name once a ``#`` in it became the frame number."""
     from ...core.maps.camera_rays import CACHE_NAME
     from ...core.maps.files import map_set_paths
+    from ...core.sampling.render_request import MODE_TRAITS
     from .render_animation import maps_folder
 
-    from ...core.sampling.render_request import MODE_TRAITS
-
     traits = MODE_TRAITS[args.mode]
-    inputs = {"--maps' map": _map_file(args)} if args.maps else {}
+    inputs = {"--maps' map": map_file_of(args)} if args.maps else {}
     # --save-maps keeps maps computed here (a frame range's ray cache too): none for a
     # baseline, or a map given.
     computes_maps = traits.director_map or traits.time_budget
@@ -117,10 +114,11 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
 def check(args) -> None:
     """The whole request, before anything else (``cli.py``): every option, and what relates
     them (uniform's --spp under the ceiling, guided's --time-budget and only guided's, every
-    other mode's --max-spp, a budget file that reads), as ``run`` will build it."""
+    other mode's --max-spp, a budget file that reads). ``run`` renders the request built here
+    (``args.request``)."""
     frames = _frames(args)
-    _, map_file = _request(args, render_options_from_args(args))
-    if frames is not None and map_file is not None:
+    args.request = render_request_from_args(args)
+    if frames is not None and args.request[1] is not None:
         raise InputError("--frames computes every frame's own maps; --map and --maps hold one frame's")
 
 
@@ -129,85 +127,8 @@ def outputs_as_a_set(args) -> bool:
     return args.frames is None
 
 
-def _read_budget(path: str):
-    """The budget recorded in the stats file ``path`` (``RecordedBudget``)."""
-    from ...core.sampling.render_stats import RecordedBudget
-
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"no such stats file: {path}") from None
-    except (OSError, ValueError, RecursionError) as error:
-        raise InputError(f"cannot read stats file {path}: {str(error).splitlines()[0]}") from None
-    return RecordedBudget.from_json(data, path)
-
-
-def _render_budget(budget, path: str) -> float:
-    """Wall time an equal-time run may render for (``RecordedBudget.render_seconds``)."""
-    seconds = budget.render_seconds
-    if seconds <= 0.0:
-        raise InputError(f"{path} leaves no time to render (wall_s less its denoising is {seconds:g} s)")
-    return seconds
-
-
-def _request(args, options) -> tuple:
-    """The ``RenderRequest`` of the command line (checked), and the director map file an
-    xs or xsl render reads instead of computing its maps (None without --map/--maps).
-
-    Every flag goes into the request as given; what a mode takes is the request's own
-    check (``MODE_TRAITS``). A stats file gives the budget its mode is measured by."""
-    from ...core.sampling.guided_plan import GuidedOptions
-    from ...core.sampling.render_request import MODE_TRAITS, RenderRequest
-
-    traits = MODE_TRAITS[args.mode]
-    if traits.time_budget:
-        guided = guided_options_from_args(args)
-    elif args.time_budget is not None:
-        # Refused by the request itself ("is for --mode guided"), before anything is read.
-        RenderRequest(args.mode, options, guided=GuidedOptions(time_budget=args.time_budget)).check()
-    else:
-        guided = None
-    map_file = None
-    if traits.director_map and (args.map or args.maps):
-        map_file = Path(args.map) if args.map else _map_file(args)
-    computes_maps = (traits.director_map and map_file is None) or traits.time_budget
-    if args.budget_from and not traits.budget_from:
-        raise InputError(f"--budget-from is for --mode uniform and adaptive (got --mode {args.mode})")
-    spp, seconds, mean_spp, budget_from = args.spp, None, None, None
-    recorded = _read_budget(args.budget_from) if args.budget_from else None
-    if args.equal_time is not None and args.equal_time >= 0:
-        if args.equal_time == 0:
-            raise InputError("--equal-time must be positive (got 0)")
-        seconds = args.equal_time
-    elif args.equal_time is not None:           # --equal-time without SECONDS: the stats file's
-        if recorded is None:
-            raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
-        seconds, budget_from = _render_budget(recorded, args.budget_from), args.budget_from
-    elif recorded is not None and spp is None:
-        budget_from = args.budget_from
-        if traits.budget_from == "spp":
-            spp, mean_spp = max(1, int(round(recorded.mean_spp))), recorded.mean_spp
-        else:
-            seconds = _render_budget(recorded, args.budget_from)
-    if traits.budget_from and spp is None and seconds is None:
-        needs = (["--spp N"] if traits.spp else []) + ["--budget-from STATS.json"]
-        raise InputError(f"--mode {args.mode} needs {', '.join(needs)} or --equal-time SECONDS")
-    request = RenderRequest(args.mode, options, spp=spp, seconds=seconds, noise_threshold=args.noise_threshold,
-                            guided=guided, map_options=map_options_from_args(args) if computes_maps else None,
-                            budget_from=budget_from, budget_mean_spp=mean_spp)
-    return request.check(), map_file
-
-
-def _map_file(args) -> Path:
-    """The map a selective render reads from --maps DIR: DIR/xs.exr or DIR/xsl.exr."""
-    from ...core.sampling.render_request import MODE_TRAITS
-
-    return Path(args.maps) / f"{args.mode if MODE_TRAITS[args.mode].director_map else 'xsl'}.exr"
-
-
 def _read_map(path: Path):
     from ...core.imageio import read_image
-
     from ...core.sampling.tile_plan import check_director_map
 
     if not path.exists():
@@ -218,10 +139,10 @@ def _read_map(path: Path):
 
 
 def run(args) -> int:
-    options = render_options_from_args(args)
     out = Path(args.out)
     frames = _frames(args)
-    request, map_file = _request(args, options)       # checked already (``check``)
+    request, map_file = args.request                  # built and checked by ``check``
+    options = request.options
     started = time.perf_counter()
     director_map = _read_map(map_file) if map_file is not None else None
     map_seconds = time.perf_counter() - started

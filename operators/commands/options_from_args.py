@@ -1,0 +1,151 @@
+"""The command line's options as core's typed records: ``RenderOptions``, ``GuidedOptions``,
+``MapOptions``, and the whole ``RenderRequest`` of ``xsl-render render`` (its budget read from
+--budget-from's stats file), each checked once. The flags are declared in ``common.py``;
+what a mode takes is the request's own check (``core.sampling.render_request``).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ...core.errors import InputError
+from ...core.maps.options import MapOptions
+from .common import parse_resolution
+
+
+def guided_options_from_args(args):
+    """``GuidedOptions`` from the guided arguments, checked (its ceiling and tile size are
+    the render options')."""
+    from ...core.sampling.guided_plan import GuidedOptions
+
+    if args.time_budget is None:
+        raise InputError("--mode guided needs --time-budget SECONDS")
+    return GuidedOptions(time_budget=args.time_budget, pilot_fraction=args.pilot_fraction,
+                         exponent=args.guided_exponent, importance=args.importance,
+                         level_ratio=args.level_ratio).check()
+
+
+def guided_render_options(args, resolution):
+    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm):
+    --max-spp as its ceiling (none given, or 0: ``UNBOUNDED_SPP``), --tile-size, --seed,
+    the resolution, and guided's volume estimator (auto)."""
+    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
+
+    return RenderOptions(max_spp=args.max_spp or UNBOUNDED_SPP, tile_size=args.tile_size, seed=args.seed,
+                         resolution=resolution, estimator="auto").check()
+
+
+def render_options_from_args(args):
+    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked.
+
+    Every mode but guided needs --max-spp; guided without it has no ceiling but
+    ``UNBOUNDED_SPP``."""
+    from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
+    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
+
+    max_spp, mode = args.max_spp, getattr(args, "mode", None)
+    if max_spp is None:
+        if not MODE_TRAITS.get(mode, ModeTraits()).time_budget:
+            raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
+        max_spp = UNBOUNDED_SPP
+    return RenderOptions(
+        max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
+        tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
+        margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
+        resolution=parse_resolution(args.resolution), denoise=args.denoise,
+        estimator=estimator_from_args(args), step_rate=getattr(args, "step_rate", None)).check()
+
+
+def estimator_from_args(args) -> str:
+    """--estimator, or its default: auto for guided (a time budget is spent best where the
+    medium's estimate costs least), the scene's own settings for every other mode (the
+    baselines and the paper's modes render what the scene asks for)."""
+    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
+
+    chosen = getattr(args, "estimator", None)
+    if chosen is not None:
+        return chosen
+    return MODE_TRAITS.get(getattr(args, "mode", None), ModeTraits()).default_estimator
+
+
+def map_options_from_args(args) -> MapOptions:
+    return MapOptions(wx=args.wx, ws=args.ws, xs_op=args.xs_op, wxs=args.wxs, wl=args.wl,
+                      xsl_op=args.xsl_op, light_n=args.light_n,
+                      light_sigma_base=args.light_sigma_base, minbound=args.minbound).validate()
+
+
+def read_budget(path: str):
+    """The budget recorded in the stats file ``path`` (``RecordedBudget``)."""
+    from ...core.sampling.render_stats import RecordedBudget
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"no such stats file: {path}") from None
+    except (OSError, ValueError, RecursionError) as error:
+        raise InputError(f"cannot read stats file {path}: {str(error).splitlines()[0]}") from None
+    return RecordedBudget.from_json(data, path)
+
+
+def render_budget(budget, path: str) -> float:
+    """Wall time an equal-time run may render for (``RecordedBudget.render_seconds``)."""
+    seconds = budget.render_seconds
+    if seconds <= 0.0:
+        raise InputError(f"{path} leaves no time to render (wall_s less its denoising is {seconds:g} s)")
+    return seconds
+
+
+def render_request_from_args(args) -> tuple:
+    """The ``RenderRequest`` of ``xsl-render render`` (checked), and the director map file an
+    xs or xsl render reads instead of computing its maps (None without --map/--maps).
+
+    Every flag goes into the request as given; what a mode takes is the request's own
+    check (``MODE_TRAITS``). A stats file gives the budget its mode is measured by."""
+    from ...core.sampling.guided_plan import GuidedOptions
+    from ...core.sampling.render_request import MODE_TRAITS, RenderRequest
+
+    options = render_options_from_args(args)
+    traits = MODE_TRAITS[args.mode]
+    if traits.time_budget:
+        guided = guided_options_from_args(args)
+    elif args.time_budget is not None:
+        # Refused by the request itself ("is for --mode guided"), before anything is read.
+        RenderRequest(args.mode, options, guided=GuidedOptions(time_budget=args.time_budget)).check()
+    else:
+        guided = None
+    map_file = None
+    if traits.director_map and (args.map or args.maps):
+        map_file = Path(args.map) if args.map else map_file_of(args)
+    computes_maps = (traits.director_map and map_file is None) or traits.time_budget
+    if args.budget_from and not traits.budget_from:
+        raise InputError(f"--budget-from is for --mode uniform and adaptive (got --mode {args.mode})")
+    spp, seconds, mean_spp, budget_from = args.spp, None, None, None
+    recorded = read_budget(args.budget_from) if args.budget_from else None
+    if args.equal_time is not None and args.equal_time >= 0:
+        if args.equal_time == 0:
+            raise InputError("--equal-time must be positive (got 0)")
+        seconds = args.equal_time
+    elif args.equal_time is not None:           # --equal-time without SECONDS: the stats file's
+        if recorded is None:
+            raise InputError("--equal-time without SECONDS needs --budget-from STATS.json")
+        seconds, budget_from = render_budget(recorded, args.budget_from), args.budget_from
+    elif recorded is not None and spp is None:
+        budget_from = args.budget_from
+        if traits.budget_from == "spp":
+            spp, mean_spp = max(1, int(round(recorded.mean_spp))), recorded.mean_spp
+        else:
+            seconds = render_budget(recorded, args.budget_from)
+    if traits.budget_from and spp is None and seconds is None:
+        needs = (["--spp N"] if traits.spp else []) + ["--budget-from STATS.json"]
+        raise InputError(f"--mode {args.mode} needs {', '.join(needs)} or --equal-time SECONDS")
+    request = RenderRequest(args.mode, options, spp=spp, seconds=seconds, noise_threshold=args.noise_threshold,
+                            guided=guided, map_options=map_options_from_args(args) if computes_maps else None,
+                            budget_from=budget_from, budget_mean_spp=mean_spp)
+    return request.check(), map_file
+
+
+def map_file_of(args) -> Path:
+    """The map a selective render reads from --maps DIR: DIR/xs.exr or DIR/xsl.exr."""
+    from ...core.sampling.render_request import MODE_TRAITS
+
+    return Path(args.maps) / f"{args.mode if MODE_TRAITS[args.mode].director_map else 'xsl'}.exr"
