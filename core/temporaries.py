@@ -136,9 +136,10 @@ def seal() -> None:
         _state["sealed"] = True
 
 
-def abort() -> bool:
+def abort(decided=None) -> bool:
     """Remove every temporary of this process, and every folder made for one that is empty;
-    False (and nothing done) once :func:`seal` was called.
+    False (and nothing done) once :func:`seal` was called. ``decided``, if given, is called
+    once the cancel is certain, before anything is removed.
 
     Called by the signal watcher just before the process ends: the gate's lock is kept, so
     neither a rename into place nor a new temporary can follow."""
@@ -147,11 +148,26 @@ def abort() -> bool:
         _lock.release()
         return False
     _state["aborted"] = True
+    if decided is not None:
+        decided()
     for name in reversed(list(_temporaries)):
-        _remove(Path(name))
+        _remove_while_written(Path(name))
     _temporaries.clear()
     remove_empty(_made_folders)
     return True
+
+
+def _remove_while_written(path: Path, passes: int = 20) -> None:
+    """Remove ``path`` while the rest of the process may still write in it: the main thread
+    and Blender's C code do not stop for the watcher (each of its system calls lets them run),
+    and they make folders of their own outside the gate, in the session folder (Blender's
+    ``blender_*`` at the end of ``import bpy``, the renders' ``tempfile.mkdtemp``). What
+    appears after ``rmtree`` listed a folder makes that folder's removal fail, silently: again
+    until it is gone (once it is, what they make by a path inside it fails)."""
+    for _ in range(passes):
+        _remove(path)
+        if not os.path.lexists(path):
+            return
 
 
 def _remove(path: Path) -> None:
@@ -213,10 +229,14 @@ def open_session() -> Path:
     file there: Python's ``tempfile`` and, through TMPDIR, Blender (its session folder), so
     that one removal clears everything. Folders of earlier runs that were killed are removed
     first. For the command line only: it changes the process's environment."""
-    base = Path(tempfile.gettempdir())
-    _sweep(base, _SESSION)
-    folder = Path(tempfile.mkdtemp(prefix=f"{SESSION_PREFIX}{os.getpid()}-", dir=base))
+    # The signal watcher already runs: under the lock that :func:`abort` takes, a cancel waits
+    # until the folder is recorded (and then removes it); so does gettempdir's probe file, the
+    # first thing made, on the first call.
     with _lock:
+        base = Path(tempfile.gettempdir())
+    _sweep(base, _SESSION)
+    with _lock:
+        folder = Path(tempfile.mkdtemp(prefix=f"{SESSION_PREFIX}{os.getpid()}-", dir=base))
         _temporaries[str(folder)] = None
         _state["session"] = folder
         _state["saved_tempdir"] = (tempfile.tempdir, {name: os.environ.get(name)

@@ -27,6 +27,7 @@ def entry() -> None:
 
     watcher = signals.start()
     temporaries.open_session()
+    sys.meta_path.insert(0, _BlenderStartsUnderTheLock())
     from .cli import main
 
     try:
@@ -44,6 +45,32 @@ def entry() -> None:
     os.dup2(devnull, 1)
     os.dup2(devnull, 2)
     sys.exit(code)
+
+
+class _BlenderStartsUnderTheLock:
+    """Finds ``bpy`` as usual, but Blender starts (``import bpy``) under the temporaries' lock.
+
+    Starting, Blender makes its session folder (``blender_*``) in ours, or in /tmp when ours
+    is gone: a cancel removing ours meanwhile (the main thread runs whenever the watcher is in
+    a system call) left the one or the other behind. So a cancel waits until Blender has
+    started (it mostly waits for the GIL then anyway) and removes its folder with ours."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "bpy":
+            return None
+        from importlib.machinery import PathFinder
+
+        from ..core import temporaries
+
+        spec = PathFinder.find_spec(name, path)
+        if spec is not None and spec.loader is not None:
+            create = spec.loader.create_module      # an extension module: Blender starts in it
+
+            def create_module(module_spec):
+                with temporaries.gate():
+                    return create(module_spec)
+            spec.loader.create_module = create_module
+        return spec
 
 
 if __name__ == "__main__":          # python -m xsl_render.operators.entry COMMAND ...

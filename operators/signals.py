@@ -22,14 +22,18 @@ for the one thread that asks for it with ``sigwait``, the :class:`Watcher`:
   the process inherited: a background job of a shell script starts with SIGINT ignored, and
   ``_thread.interrupt_main`` does nothing then.
 
-The watcher needs the GIL to act: while Blender holds it (up to about half a second during
-``import bpy``) the cancel waits, but it always comes, and nothing is written meanwhile.
+The watcher needs the GIL to act: while Blender holds it the cancel waits, but it always
+comes, and nothing is written meanwhile. While Blender starts (``import bpy``, about half a
+second) it waits for the start to end (``entry.py``): Blender makes its own temporary folder
+then. The main thread goes on while the temporaries go: what it says from the decision on
+goes nowhere, so the cancel's line is the only one.
 """
 from __future__ import annotations
 
 import _thread
 import os
 import signal
+import sys
 import threading
 
 from ..core import temporaries
@@ -67,11 +71,31 @@ class Watcher:
 
     def cancel(self, signum: int) -> None:
         """Remove every temporary and end the process, unless the outputs are in place."""
-        if not temporaries.abort():
+        if not temporaries.abort(decided=self._mute):
             return
         newline = "\n" if _is_terminal(self._stderr) else ""    # after a progress bar's \r
         os.write(self._stderr, f"{newline}xsl-render: cancelled\n".encode())
         os._exit(EXIT_CODES.get(signum, 130))
+
+    def _mute(self) -> None:
+        """The main thread goes on while the temporaries go, and may fail on one that vanished
+        and say so: once the cancel is decided, the process's output goes nowhere (Python's
+        streams and fds 1 and 2); the cancel's own line goes to the terminal's copy."""
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+        except OSError:
+            return                          # never stop the cancel itself
+        fds = {1, 2}
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                fds.add(stream.fileno())
+            except (AttributeError, OSError, ValueError):
+                pass
+        for fd in fds - {self._stderr}:
+            try:
+                os.dup2(devnull, fd)
+            except OSError:
+                pass
 
 
 def _is_terminal(fd: int) -> bool:
