@@ -21,7 +21,6 @@ from .worker_environment import WorkerSetup
 #: The modes a farm renders: those that plan their frame themselves (a selective one's tiles
 #: are tasks of their own; a time budget's frame is one task).
 MODES = tuple(mode for mode, traits in MODE_TRAITS.items() if traits.director_map or traits.time_budget)
-GUIDED = next(mode for mode in MODES if MODE_TRAITS[mode].time_budget)
 #: MaxSpp of a guided job without a per-pixel ceiling. An INT parameter cannot be empty, and
 #: 0 samples per pixel means nothing else, so the farm's form can still check the number.
 NO_CEILING = 0
