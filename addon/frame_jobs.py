@@ -170,7 +170,7 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
         importance, map_seconds = prepared if prepared is not None else (None, 0.0)
         frame_guided = guided if sequence is None else replace(guided, time_budget=sequence.next_budget())
         outcome = yield from guided_steps(scene, options, frame_guided, importance, map_seconds,
-                                          sync_outside=sequence is not None)
+                                          pace=sequence)
         if sequence is not None:
             sequence.record(outcome.stats.wall_s)
             outcome.stats.sequence_budget = sequence.to_dict()

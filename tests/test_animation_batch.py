@@ -161,3 +161,9 @@ def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget,
     images = [read_image(frame["out"]) for frame in frames]
     assert not np.array_equal(images[0], images[2])                  # the camera moved
     assert scene.render.use_persistent_data is False                 # the file's own setting
+    if mode == "guided":
+        # The frames after the first know what a sample costs: no pilot, one render each, at
+        # the count of the frame before.
+        assert frames[0]["pilot_spp"] >= 1 and frames[0]["renders"] >= 2
+        assert [(frame["pilot_spp"], frame["renders"]) for frame in frames[1:]] == [(0, 1), (0, 1)]
+        assert frames[1]["mean_spp"] == frames[2]["mean_spp"] == frames[1]["sequence_budget"]["spp"]

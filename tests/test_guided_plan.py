@@ -250,3 +250,20 @@ def test_a_sequence_never_starves_a_frame():
                                              (70, 70), (600, 600)])
 def test_a_whole_frame_count_just_above_a_power_of_two_is_rounded_down_to_it(count, friendly):
     assert sobol_friendly(count) == friendly
+
+
+def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
+    from xsl_render.core.sampling.guided_plan import HOLD_RANGE, SequenceBudget
+
+    sequence = SequenceBudget(per_frame=2.0, frames=4)
+    assert sequence.steady_count(18.0, 4096) == 16              # no frame before: a fresh count
+    sequence.observe(1e-6, 16)
+    assert (sequence.rate, sequence.spp) == (1e-6, 16)
+    low, high = HOLD_RANGE
+    for affordable in (low * 16, 16.0, 19.0, high * 16):        # within the range: held
+        assert sequence.steady_count(affordable, 4096) == 16
+    assert sequence.steady_count(low * 16 - 1.0, 4096) == 12    # too dear now: fewer
+    assert sequence.steady_count(2 * 16, 4096) == 32            # much more time: more
+    assert sequence.steady_count(16.0, 8) == 8                  # never above the ceiling
+    sequence.observe(0.0, 4)                                    # nothing measured: kept
+    assert sequence.spp == 16

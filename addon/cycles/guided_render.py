@@ -4,7 +4,11 @@
 1. Importance, when asked for: the X, XS or XSL director map, computed by the caller
    (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
 2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else
-   (outside it for a frame of an animation, whose sequence pays it back: ``sync_outside``).
+   (outside it for a frame of an animation, whose sequence pays it back: ``pace``). A later
+   frame of an animation (default allocation) skips 3-5: the frame before measured what a
+   full-resolution sample costs, so it renders the whole frame once, at the frame before's
+   count while that fits (``SequenceBudget.steady_count``: a count that changes from frame to
+   frame shows as flicker).
 3. Pilot: the whole frame at a quarter of its resolution, one sample, then at most 16 for at
    most a small share of the budget (2 % when nothing is scored); the two renders' times
    give the cost of a sample without a render's fixed cost.
@@ -29,11 +33,11 @@ import time
 import numpy as np
 
 from ...core.progress import ProgressCallback, Steps, run_steps
-from ...core.sampling.guided_plan import (BudgetPacer, GuidedOptions, error_scores, plan_final_pass,
-                                          sobol_friendly, tile_means)
+from ...core.sampling.guided_plan import (BudgetPacer, FinalPass, GuidedOptions, SequenceBudget,
+                                          error_scores, plan_final_pass, sobol_friendly, tile_means)
 from ...core.sampling.pass_merge import PassAccumulator
 from ...core.sampling.render_options import RenderOptions
-from ...core.sampling.tile_plan import check_director_map, tile_windows
+from ...core.sampling.tile_plan import Rect, check_director_map, tile_windows
 from ...core.tonemap import standard_view
 from ..scene.state import preserved_scene
 from .selective_render import RenderOutcome, finish_image, prepare_render, render_stats, tile_entry
@@ -108,12 +112,14 @@ def render_guided(scene, options: RenderOptions, guided: GuidedOptions,
 
 def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                  importance: np.ndarray | None = None, map_seconds: float = 0.0,
-                 sync_outside: bool = False) -> Steps[RenderOutcome]:
+                 pace: SequenceBudget | None = None) -> Steps[RenderOutcome]:
     """``render_guided`` as steps (``core.progress``); closing it restores the scene.
 
-    ``sync_outside``: the scene sync's seconds are added to the budget instead of taken from
-    it (a frame of an animation: ``core.sampling.guided_plan.SequenceBudget`` charges them
-    to the frames after it, which find the scene synced)."""
+    ``pace``: the frame is one of a range (``core.sampling.guided_plan.SequenceBudget``): its
+    scene sync's seconds are added to its budget instead of taken from it (the range charges
+    them to the frames after it, which find the scene synced); what its final pass cost per
+    sample is told to ``pace`` for the next frame, which renders without a pilot."""
+    sync_outside = pace is not None
     guided.check()
     budget = guided.time_budget
     # Auto's estimator prediction ran before, inside the budget like the importance map.
@@ -138,84 +144,111 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             if sync_outside:
                 budget += phases["sync"]
 
-            # The pilot: a quarter of the resolution, a first sample timing it, then as many
-            # as its share allows. (No Cycles time limit: a limit set and unset at the same
-            # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
             reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-            # A pilot that only times the render (nothing scored) takes less.
-            fraction = guided.pilot_fraction if guided.exponent else min(guided.pilot_fraction,
-                                                                         _CLOCK_PILOT_FRACTION)
-            pilot_share = fraction * (budget - clock.now() - reserve)
             reduce = pilot_reduce(width, height)
-            paused = clock.pause()
-            yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
-            clock.resume(paused)
-            began = clock.now()
-            first = renderer.render(None, 1, reduce=reduce)
-            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
-            # (Two samples at least where the rate is all it measures: its two renders' times.)
-            have = max(1 if guided.exponent else min(2, options.max_spp),
-                       min(options.max_spp, _PILOT_MAX_SPP, fit))
-            pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
-            phases["pilot"] = clock.now() - began
-            # No time limit: every pilot pixel has exactly ``have`` samples.
-            pixels = float(pilot.pixels.shape[0] * pilot.pixels.shape[1])
-            # Seconds per pixel-sample (a pilot pixel traces what a full one does per sample):
-            # from the two renders' difference, which leaves out a render's fixed cost.
-            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / (have * pixels)
-            if have > 1 and pilot.seconds > first.seconds:
-                rate = max((pilot.seconds - first.seconds) / ((have - 1) * pixels), 0.5 * rate)
-            tiles.append(tile_entry((0, height, 0, width), pilot)
-                         | {"pass": "pilot", "resolution_divisor": reduce})
-
-            # Scores from the denoised pilot (none at exponent 0: every tile alike).
-            paused = clock.pause()
-            yield 0.15, f"guided: scoring the pilot ({have} spp)" if guided.exponent else "guided: planning"
-            clock.resume(paused)
-            began = clock.now()
-            scoring_denoise, scores = 0.0, np.ones(len(windows))
-            if guided.exponent:
-                # Denoised whatever the final image gets: the score is the error a denoised
-                # frame keeps, and a raw pilot's gradient is mostly its noise.
-                from .denoise import denoise
-
-                scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
-                scoring_denoise = clock.now() - began
-                scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
-            weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
-            phases["scoring"] = clock.now() - began
-
-            # The final pass: planned for the time left once the final denoise is set aside,
-            # then planned again with each of its renders' fixed cost set aside too.
-            denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0
-            left = budget - clock.now() - denoise_reserve
-            final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate,
-                                    options.tile_size, options.max_spp)
-            final = plan_final_pass(scores, weights, width, height, guided,
-                                    max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate,
-                                    options.tile_size, options.max_spp)
-            rects = final.rects
-            pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S,
-                                side_by_side=final.flat)
-            began = clock.now()
-            for index, rect in enumerate(rects):
+            if pace is not None and pace.rate and not guided.exponent and importance is None:
+                # A later frame of a range: the frame before measured what a full-resolution
+                # sample costs, so no pilot and no columns: one render of the whole frame, at
+                # the frame before's count while it fits (``SequenceBudget.steady_count``).
+                rate, have, reduce, pilot_seconds = pace.rate, 0, 1, 0.0
+                phases["pilot"] = phases["scoring"] = 0.0
+                denoise_reserve = reserve
+                left = budget - clock.now() - denoise_reserve - _RENDER_OVERHEAD_S
+                spp = pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp)
+                final = FinalPass([Rect(0, height, 0, width, spp)], np.full(len(windows), float(spp)), flat=True)
                 paused = clock.pause()
-                yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
+                yield 0.2, f"guided: the frame at {spp} spp"
                 clock.resume(paused)
-                factor = pacer.scale(budget - clock.now() - denoise_reserve)
-                # Every pixel gets a sample, even when the clock is already out. A flat plan
-                # takes as many as fit, at a count Cycles' patterns stratify well.
-                wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
-                spp = max(1, min(wanted, options.max_spp))
-                if final.flat:
-                    spp = sobol_friendly(spp)
-                piece = renderer.render(rect.window, spp)
-                # (A scene sync Cycles did on the way is not what a sample costs.)
-                pacer.record(piece.seconds - piece.sync_seconds, rate * spp * rect.area)
-                image.add(rect.window, piece.pixels, spp)
-                guides.add(rect.window, piece.guides, spp)
-                tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
-            phases["final"] = clock.now() - began
+                began = clock.now()
+                piece = renderer.render(None, spp)
+                image.add((0, height, 0, width), piece.pixels, spp)
+                guides.add((0, height, 0, width), piece.guides, spp)
+                tiles.append(tile_entry((0, height, 0, width), piece) | {"pass": "final"})
+                phases["final"] = clock.now() - began
+                rendered_s, rendered_samples = piece.seconds - piece.sync_seconds, spp * width * height
+            else:
+                # The pilot: a quarter of the resolution, a first sample timing it, then as many
+                # as its share allows. (No Cycles time limit: a limit set and unset at the same
+                # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
+                # A pilot that only times the render (nothing scored) takes less.
+                fraction = guided.pilot_fraction if guided.exponent else min(guided.pilot_fraction,
+                                                                             _CLOCK_PILOT_FRACTION)
+                pilot_share = fraction * (budget - clock.now() - reserve)
+                paused = clock.pause()
+                yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
+                clock.resume(paused)
+                began = clock.now()
+                first = renderer.render(None, 1, reduce=reduce)
+                fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
+                # (Two samples at least where the rate is all it measures: its two renders' times.)
+                have = max(1 if guided.exponent else min(2, options.max_spp),
+                           min(options.max_spp, _PILOT_MAX_SPP, fit))
+                pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
+                phases["pilot"] = clock.now() - began
+                # No time limit: every pilot pixel has exactly ``have`` samples.
+                pixels = float(pilot.pixels.shape[0] * pilot.pixels.shape[1])
+                # Seconds per pixel-sample (a pilot pixel traces what a full one does per sample):
+                # from the two renders' difference, which leaves out a render's fixed cost.
+                rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / (have * pixels)
+                if have > 1 and pilot.seconds > first.seconds:
+                    rate = max((pilot.seconds - first.seconds) / ((have - 1) * pixels), 0.5 * rate)
+                pilot_seconds = pilot.seconds
+                tiles.append(tile_entry((0, height, 0, width), pilot)
+                             | {"pass": "pilot", "resolution_divisor": reduce})
+
+                # Scores from the denoised pilot (none at exponent 0: every tile alike).
+                paused = clock.pause()
+                yield 0.15, f"guided: scoring the pilot ({have} spp)" if guided.exponent else "guided: planning"
+                clock.resume(paused)
+                began = clock.now()
+                scoring_denoise, scores = 0.0, np.ones(len(windows))
+                if guided.exponent:
+                    # Denoised whatever the final image gets: the score is the error a denoised
+                    # frame keeps, and a raw pilot's gradient is mostly its noise.
+                    from .denoise import denoise
+
+                    scored = denoise(pilot.pixels, pilot.guides[..., :3], pilot.guides[..., 3:6])
+                    scoring_denoise = clock.now() - began
+                    scores = error_scores(standard_view(scored[..., :3]).mean(axis=2), windows, reduce)
+                weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
+                phases["scoring"] = clock.now() - began
+
+                # The final pass: planned for the time left once the final denoise is set aside,
+                # then planned again with each of its renders' fixed cost set aside too.
+                denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0
+                left = budget - clock.now() - denoise_reserve
+                final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate,
+                                        options.tile_size, options.max_spp)
+                final = plan_final_pass(scores, weights, width, height, guided,
+                                        max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate,
+                                        options.tile_size, options.max_spp)
+                rects = final.rects
+                pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S,
+                                    side_by_side=final.flat)
+                began, rendered_s, rendered_samples = clock.now(), 0.0, 0
+                for index, rect in enumerate(rects):
+                    paused = clock.pause()
+                    yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
+                    clock.resume(paused)
+                    factor = pacer.scale(budget - clock.now() - denoise_reserve)
+                    # Every pixel gets a sample, even when the clock is already out. A flat plan
+                    # takes as many as fit, at a count Cycles' patterns stratify well.
+                    wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
+                    spp = max(1, min(wanted, options.max_spp))
+                    if final.flat:
+                        spp = sobol_friendly(spp)
+                    piece = renderer.render(rect.window, spp)
+                    # (A scene sync Cycles did on the way is not what a sample costs.)
+                    pacer.record(piece.seconds - piece.sync_seconds, rate * spp * rect.area)
+                    rendered_s += piece.seconds - piece.sync_seconds
+                    rendered_samples += spp * rect.area
+                    image.add(rect.window, piece.pixels, spp)
+                    guides.add(rect.window, piece.guides, spp)
+                    tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
+                phases["final"] = clock.now() - began
+            if pace is not None and rendered_samples:
+                pace.observe(rendered_s / rendered_samples,
+                             sobol_friendly(rendered_samples // (width * height)))
 
         began = clock.now()
         merged, merged_guides = image.result(), guides.result()
@@ -228,7 +261,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     if sync_outside:
         stats.sync_outside_budget_s = phases["sync"]
     stats.time_budget_s, stats.guided = guided.time_budget, guided
-    stats.pilot_spp, stats.pilot_seconds, stats.pilot_resolution_divisor = have, pilot.seconds, reduce
+    stats.pilot_spp, stats.pilot_seconds, stats.pilot_resolution_divisor = have, pilot_seconds, reduce
     stats.seconds_per_pixel_sample, stats.final_pass = rate, final.to_dict()
     stats.denoise_reserved_s, stats.cycles_sync_s = denoise_reserve, renderer.sync_seconds
     if stats.wall_s > 1.1 * budget:

@@ -344,6 +344,9 @@ class BudgetPacer:
         return float(min(cap, max(0.0, usable / (planned * self.cost_ratio))))
 
 
+#: A later frame of a guided range keeps the frame before's sample count while what it can
+#: afford stays within this range of it (``SequenceBudget.steady_count``).
+HOLD_RANGE = (0.85, 1.3)
 #: A frame of a guided animation is never given less than this share of the per-frame budget,
 #: whatever the frames before it overran (a short sequence with a long first sync overruns
 #: its total instead of starving its frames).
@@ -367,6 +370,10 @@ class SequenceBudget:
     frames: int
     spent: float = 0.0
     done: int = 0
+    #: What the frame before measured: seconds per full-resolution pixel-sample (its final
+    #: pass, scene sync left out) and its samples per pixel. None before the first frame.
+    rate: float | None = None
+    spp: int | None = None
 
     def next_budget(self) -> float:
         """Seconds for the next frame, its scene sync not included."""
@@ -378,6 +385,21 @@ class SequenceBudget:
         """A frame took ``seconds`` (wall, its sync included)."""
         self.spent += float(seconds)
         self.done += 1
+
+    def observe(self, rate: float, spp: int) -> None:
+        """What a frame's final pass cost per pixel-sample, and the count it rendered."""
+        if rate > 0.0:
+            self.rate, self.spp = float(rate), int(spp)
+
+    def steady_count(self, affordable: float, ceiling: int) -> int:
+        """The samples per pixel of a later frame that can afford ``affordable``: the frame
+        before's count while it stays within ``HOLD_RANGE`` of that (a count that changes
+        from frame to frame changes the noise, which shows as flicker; the range's budget
+        absorbs the difference), else a fresh one at a count Cycles' patterns like."""
+        low, high = HOLD_RANGE
+        if self.spp and low * self.spp <= affordable <= high * self.spp:
+            return max(1, min(self.spp, ceiling))
+        return sobol_friendly(max(1, min(int(affordable), ceiling)))
 
     def to_dict(self) -> dict:
         return asdict(self)
