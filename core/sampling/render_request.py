@@ -44,6 +44,11 @@ class ModeTraits:
     budget_from: str | None = None
 
     @property
+    def computes_maps(self) -> bool:
+        """Computes director maps in the run (xs, xsl unless given one; guided's importance)."""
+        return self.director_map or self.time_budget
+
+    @property
     def default_estimator(self) -> str:
         """A time budget is spent best where the medium's estimate costs least (``auto``);
         every other mode renders what the scene asks for."""

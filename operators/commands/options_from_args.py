@@ -116,7 +116,7 @@ def render_request_from_args(args) -> tuple:
     map_file = None
     if traits.director_map and (args.map or args.maps):
         map_file = Path(args.map) if args.map else map_file_of(args)
-    computes_maps = (traits.director_map and map_file is None) or traits.time_budget
+    computes_maps = traits.computes_maps and not (traits.director_map and map_file is not None)
     if args.budget_from and not traits.budget_from:
         raise InputError(f"--budget-from is for --mode uniform and adaptive (got --mode {args.mode})")
     spp, seconds, mean_spp, budget_from = args.spp, None, None, None

@@ -88,8 +88,7 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
     inputs = {"--maps' map": map_file_of(args)} if args.maps else {}
     # --save-maps keeps maps computed here (a frame range's ray cache too): none for a
     # baseline, or a map given.
-    computes_maps = traits.director_map or traits.time_budget
-    save_maps = args.save_maps if computes_maps and not (args.map or args.maps) else None
+    save_maps = args.save_maps if traits.computes_maps and not (args.map or args.maps) else None
     frames = _frames(args)
     outputs = {}
     if frames is None:
