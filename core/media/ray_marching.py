@@ -166,9 +166,10 @@ class MarchingPredictor:
         self.pieces = _ray_pieces(rays, media, segments, self.pixels)
         # Pieces in homogeneous media only are marched in one exact step at every rate.
         self.tau_exact = np.zeros((len(self.pixels), 3))
-        for active, rows, a, b, count in self._batches(1.0):
-            if count == 0:
-                self._integrate(self.tau_exact, active, rows, a, b, 1)
+        with _Evaluator(media) as evaluate:
+            for active, rows, a, b, count in self._batches(1.0):
+                if count == 0:
+                    self._integrate(evaluate, self.tau_exact, active, rows, a, b, 1)
         self.tau_stepped = np.zeros((len(self.pixels), 3))
         self._truth_rate = math.inf
         self._cache: dict[float, MarchingError] = {}
@@ -180,9 +181,11 @@ class MarchingPredictor:
         if rate >= self._truth_rate:
             return
         self.tau_stepped = np.zeros((len(self.pixels), 3))
-        for active, rows, a, b, count in self._batches(rate):
-            if count:
-                self._integrate(self.tau_stepped, active, rows, a, b, max(count * REFERENCE_REFINE, 16))
+        with _Evaluator(self.media) as evaluate:
+            for active, rows, a, b, count in self._batches(rate):
+                if count:
+                    self._integrate(evaluate, self.tau_stepped, active, rows, a, b,
+                                    max(count * REFERENCE_REFINE, 16))
         self._truth_rate = rate
 
     @property
@@ -190,7 +193,7 @@ class MarchingPredictor:
         """Some piece of some sampled ray is marched in steps (else every rate is exact)."""
         return any(math.isfinite(min(self.steps[m] for m in active)) for *_, active in self.pieces)
 
-    def _integrate(self, tau, active, rows, a, b, samples: int) -> None:
+    def _integrate(self, evaluate, tau, active, rows, a, b, samples: int) -> None:
         """Midpoint rule with ``samples`` points per piece, added into ``tau``."""
         per_chunk = max(1, _CHUNK_POINTS // samples)
         for first in range(0, len(rows), per_chunk):
@@ -198,8 +201,10 @@ class MarchingPredictor:
             r, lo, hi = rows[part], a[part], b[part]
             t = lo[:, None] + (np.arange(samples)[None, :] + 0.5) / samples * (hi - lo)[:, None]
             points = self.origins[r][:, None, :] + self.directions[r][:, None, :] * t[..., None]
-            sigma = _extinction(self.media, active, points.reshape(-1, 3)).reshape(len(r), samples, 3)
-            _add(tau, r, sigma.mean(axis=1) * (hi - lo)[:, None])
+
+            def done(sigma, r=r, lo=lo, hi=hi):
+                _add(tau, r, sigma.reshape(len(r), samples, 3).mean(axis=1) * (hi - lo)[:, None])
+            evaluate(active, points.reshape(-1, 3), done)
 
     def _batches(self, rate: float):
         """(active media, rows, a, b, padded step count) of pieces marched alike; a count of
@@ -227,16 +232,17 @@ class MarchingPredictor:
             self._true_depth(rate)
             runs = len(self.u)
             tau_runs = np.repeat(self.tau_exact[:, None, :], runs, axis=1)
-            for active, rows, a, b, count in self._batches(rate):
-                if count == 0:
-                    continue
-                step = min(self.steps[m] for m in active) * rate
-                step = np.maximum(np.minimum(step, b - a), (b - a) / self.max_steps)
-                per_chunk = max(1, _CHUNK_POINTS // (runs * count))
-                for first in range(0, len(rows), per_chunk):
-                    part = slice(first, first + per_chunk)
-                    _add(tau_runs, rows[part],
-                         self._march(active, rows[part], a[part], b[part], step[part], count))
+            with _Evaluator(self.media) as evaluate:
+                for active, rows, a, b, count in self._batches(rate):
+                    if count == 0:
+                        continue
+                    step = min(self.steps[m] for m in active) * rate
+                    step = np.maximum(np.minimum(step, b - a), (b - a) / self.max_steps)
+                    per_chunk = max(1, _CHUNK_POINTS // (runs * count))
+                    for first in range(0, len(rows), per_chunk):
+                        part = slice(first, first + per_chunk)
+                        self._march(evaluate, tau_runs, active, rows[part], a[part], b[part],
+                                    step[part], count)
             truth = np.exp(-(self.tau_exact + self.tau_stepped))
             estimates = np.exp(-tau_runs)
             self._cache[rate] = MarchingError(
@@ -244,8 +250,9 @@ class MarchingPredictor:
                 spread=estimates.std(axis=1), step_rate=rate)
         return self._cache[rate]
 
-    def _march(self, active, rows, a, b, step, count) -> np.ndarray:
-        """Cycles' stepping over pieces: (n, runs, 3) optical depth per offset pair."""
+    def _march(self, evaluate, tau_runs, active, rows, a, b, step, count) -> None:
+        """Cycles' stepping over pieces: their optical depth per offset pair added into
+        ``tau_runs`` (rays, runs, 3)."""
         u, v = self.u, self.v
         runs, n = len(u), len(a)
         o, d = self.origins[rows], self.directions[rows]
@@ -259,8 +266,51 @@ class MarchingPredictor:
         dt = ends - starts
         shade = starts + v[None, :, None] * dt
         points = o[:, None, None, :] + d[:, None, None, :] * shade[..., None]
-        sigma = _extinction(self.media, active, points.reshape(-1, 3)).reshape(n, runs, count, 3)
-        return (sigma * dt[..., None]).sum(axis=2)
+
+        def done(sigma):
+            _add(tau_runs, rows, (sigma.reshape(n, runs, count, 3) * dt[..., None]).sum(axis=2))
+        evaluate(active, points.reshape(-1, 3), done)
+
+
+class _Evaluator:
+    """Evaluates the media's extinction for many small sets of points in few calls.
+
+    A medium's shader costs a fixed few milliseconds per call (a noise texture is hundreds
+    of numpy operations) on top of its cost per point, and a rate's pieces fall into dozens
+    of batches of a few thousand points (street at rate 0.25: 25). Points asked for with the
+    same active media are therefore gathered up to ``_CHUNK_POINTS`` and evaluated at once;
+    each set's ``done`` gets its (k, 3) extinction. Leaving the ``with`` block evaluates the
+    rest.
+    """
+
+    def __init__(self, media):
+        self.media = media
+        self._waiting: dict = {}
+
+    def __enter__(self):
+        return self
+
+    def __call__(self, active, points: np.ndarray, done) -> None:
+        waiting = self._waiting.setdefault(active, [])
+        waiting.append((points, done))
+        if sum(len(p) for p, _ in waiting) >= _CHUNK_POINTS:
+            self._flush(active)
+
+    def _flush(self, active) -> None:
+        waiting = self._waiting.pop(active, [])
+        if not waiting:
+            return
+        sigma = _extinction(self.media, active, np.concatenate([p for p, _ in waiting]))
+        first = 0
+        for points, done in waiting:
+            done(sigma[first:first + len(points)])
+            first += len(points)
+
+    def __exit__(self, kind, value, traceback):
+        if kind is None:
+            for active in list(self._waiting):
+                self._flush(active)
+        return False
 
 
 def _add(target: np.ndarray, rows: np.ndarray, values: np.ndarray) -> None:
