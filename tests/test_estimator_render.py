@@ -101,12 +101,14 @@ def test_cli_records_the_choice(cli, blender, tmp_path):
     assert chosen["estimator"] == "auto" and chosen["tried"]
     assert stats["phases_s"]["estimator"] == pytest.approx(chosen["seconds"])
     assert stats["wall_s"] >= chosen["seconds"]
-    frames = cli("render", path, "--mode", "uniform", "--spp", "1", "--max-spp", "4",
+    # (uniform's --spp alone is its ceiling too: no --max-spp needed.)
+    frames = cli("render", path, "--mode", "uniform", "--spp", "1",
                  "--estimator", "biased", "--step-rate", "2", "--frames", "1-2",
                  "--out", tmp_path / "f_#.exr", "--stats", tmp_path / "f.json", "--quiet")
     assert frames.returncode == 0, frames.stderr
     done = json.loads((tmp_path / "f.json").read_text())["frames"]
     assert [f["estimator"]["step_rate"] for f in done] == [2.0, 2.0]
+    assert [f["mean_spp"] for f in done] == [1.0, 1.0]
 
 
 @pytest.mark.parametrize("extra, message", [

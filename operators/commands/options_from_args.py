@@ -39,13 +39,16 @@ def render_options_from_args(args):
     """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked.
 
     Every mode but guided needs --max-spp; guided without it has no ceiling but
-    ``UNBOUNDED_SPP``."""
+    ``UNBOUNDED_SPP``, and uniform given --spp alone takes that count as its ceiling."""
     from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
     from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
 
     max_spp, mode = args.max_spp, getattr(args, "mode", None)
+    traits = MODE_TRAITS.get(mode, ModeTraits())
+    if max_spp is None and traits.spp and getattr(args, "spp", None) is not None:
+        max_spp = args.spp
     if max_spp is None:
-        if not MODE_TRAITS.get(mode, ModeTraits()).time_budget:
+        if not traits.time_budget:
             raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
         max_spp = UNBOUNDED_SPP
     return RenderOptions(

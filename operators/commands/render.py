@@ -40,7 +40,8 @@ def add_arguments(parser) -> None:
                              "error scores with --guided-exponent > 0)")
     parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None,
                         help="samples per pixel where the map is 1 (every mode but guided, where it "
-                             "is an optional per-pixel ceiling)")
+                             "is an optional per-pixel ceiling, and uniform with --spp, whose "
+                             "count it defaults to)")
     parser.add_argument("--out", required=True, metavar="FILE.exr", type=argtypes.output_file(".exr"),
                         help="the rendered image")
     parser.add_argument("--stats", metavar="FILE.json", type=argtypes.output_file(),
