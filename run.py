@@ -7,7 +7,8 @@ installs the project itself in editable mode, which puts the ``xsl-render`` comm
 into ``.venv``. Then it does its job:
 
     demo [ARGS...]   the main job on the bundled road scene (extra ARGS are passed on)
-    test [ARGS...]   the test suite: ``pytest`` (extra ARGS are passed on)
+    test [ARGS...]   the test suite: ``pytest`` on every core, then the tests marked timing
+                     alone; with ARGS, one ``pytest ARGS`` run
 
 Only the Python standard library is used here, so any Python 3.11 can run it.
 """
@@ -83,8 +84,22 @@ def main(argv: list[str]) -> int:
         command = [str(venv_bin("xsl-render")), "demo", *rest]
     else:
         ensure_browser()
-        command = [str(venv_bin("python")), "-m", "pytest", *rest]
+        pytest = [str(venv_bin("python")), "-m", "pytest"]
+        if not rest:
+            return whole_suite(pytest)
+        command = [*pytest, *rest]
     return subprocess.call(command, cwd=ROOT)
+
+
+def whole_suite(pytest: list[str]) -> int:
+    """The suite in two runs: every test but the timed ones on as many workers as there are
+    cores (at most 4; most tests wait on one thread: Blender's start-up, files, other
+    processes), then the tests marked ``timing`` alone, since they measure the wall clock
+    (a time budget kept, a cache hit) and a second worker's renders would slow them."""
+    workers = str(max(1, min(4, os.cpu_count() or 1)))
+    parallel = subprocess.call([*pytest, "-n", workers, "-m", "not timing"], cwd=ROOT)
+    alone = subprocess.call([*pytest, "-m", "timing"], cwd=ROOT)
+    return parallel or alone
 
 
 if __name__ == "__main__":

@@ -126,6 +126,7 @@ def test_scaled_steps_and_the_step_runner():
     assert log == ["closed"] and runner.done
 
 
+@pytest.mark.timing
 def test_timed_steps_count_the_work_not_the_wait_between_steps():
     import time
 

@@ -68,6 +68,7 @@ def test_passes_of_two_seeds_merge_into_one_estimate(fog):
     assert unweighted / baseline > 1.15                     # the test can tell the weighting
 
 
+@pytest.mark.timing
 @pytest.mark.parametrize("exponent", [0.0, 0.15])
 def test_guided_render_keeps_its_time_budget(fog, exponent):
     budget = 4.0
@@ -86,6 +87,7 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
     assert np.isfinite(outcome.image).all() and outcome.image.shape == (54, 96, 4)
 
 
+@pytest.mark.timing
 def test_guided_render_obeys_its_ceiling_and_restores_the_scene(fog):
     before = settings_dump(fog)
     outcome = render_guided(fog, RenderOptions(max_spp=8), GuidedOptions(time_budget=6.0))

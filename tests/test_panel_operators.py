@@ -320,6 +320,7 @@ def test_errors_name_settings_by_the_labels_the_panel_shows(blender, addon):
                                        min_spp=8)) == "tile_quantile (2) and Min Samples (8)"
 
 
+@pytest.mark.timing
 def test_presets_follow_the_paper_and_defaults_come_back(blender, fog):
     settings = fog.xsl_render
     for key, preset in PRESETS.items():
@@ -361,6 +362,7 @@ def within_budget(stats, budget: float = BUDGET) -> bool:
         and EARLY * budget <= stats.wall_s <= 1.1 * budget
 
 
+@pytest.mark.timing
 def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, budget_fog, tmp_path):
     from xsl_render.addon.scene.state import settings_dump
     from xsl_render.core.progress import run_steps
@@ -391,6 +393,7 @@ def test_guided_render_in_one_go_keeps_its_budget_with_the_map_inside(blender, b
     assert settings_dump(budget_fog) == before
 
 
+@pytest.mark.timing
 def test_guided_render_in_steps_keeps_its_budget_and_esc_restores(blender, budget_fog):
     from xsl_render.addon.scene.state import settings_dump
     from xsl_render.operators import job_operator
@@ -415,6 +418,7 @@ def test_guided_render_in_steps_keeps_its_budget_and_esc_restores(blender, budge
     cancel_midway(blender, budget_fog, before, "rectangle 2/", "Guided render")   # into the final pass
 
 
+@pytest.mark.timing
 def test_guided_animation_shares_its_time_between_frames(blender, budget_fog, tmp_path):
     """The range gets frames x budget; the first frame's scene sync is paid back by the rest."""
     import OpenImageIO as oiio

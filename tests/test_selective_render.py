@@ -166,6 +166,7 @@ def test_scene_without_camera(fog):
         sr.render_gold(fog, RenderOptions(max_spp=1))
 
 
+@pytest.mark.timing
 def test_uniform_and_adaptive_stop_at_the_time_budget(fog):
     options = RenderOptions(max_spp=4096, resolution=(48, 27))
     uniform = sr.render_uniform(fog, options, seconds=0.6)
@@ -207,6 +208,7 @@ def test_a_new_noise_threshold_reaches_cycles_without_a_resync(fog):
 
 
 
+@pytest.mark.timing
 @pytest.mark.parametrize("mode", ["uniform", "adaptive"])
 def test_equal_time_baselines_sync_a_volume_scene_once(blender, mode):
     # balls_b's noise fog costs Cycles seconds of sync at any size (Blender 5 builds the

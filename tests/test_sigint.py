@@ -26,7 +26,9 @@ import pytest
 
 from conftest import EXAMPLES
 
-pytestmark = pytest.mark.blender            # the commands load Blender (when not stopped first)
+# The commands load Blender (when not stopped first); the Ctrl-C moments are timed from the
+# process's start, which a second worker's renders would shift.
+pytestmark = [pytest.mark.blender, pytest.mark.timing]
 
 EXE = Path(sys.executable).with_name("xsl-render")
 SCENE = EXAMPLES / "road.blend"

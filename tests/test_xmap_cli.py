@@ -48,6 +48,7 @@ def test_xmap_command_writes_the_maps(cli, fog_blend, tmp_path):
     assert read_image(out / "x.exr")[:, :, 0][sky].max() < x[~sky].min()
 
 
+@pytest.mark.timing
 def test_changed_media_reuse_the_cached_rays(blender, tmp_path):
     """Density, colour and an animated frame change X but not the rays: no ray is cast,
     and the result is what a fresh computation gives."""

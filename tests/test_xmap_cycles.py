@@ -86,6 +86,7 @@ def test_nested_and_overlapping_mesh_volumes(blender):
     _compare_z(scene, z)
 
 
+@pytest.mark.timing
 def test_noise_driven_density_with_camera_inside_and_recomputed_from_cache(blender, tmp_path):
     from xsl_render.addon.maps.xmap import compute_x_map
 
