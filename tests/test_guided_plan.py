@@ -257,7 +257,7 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
 
     sequence = SequenceBudget(per_frame=2.0, frames=4)
     assert sequence.steady_count(18.0, 4096) == 16              # no frame before: a fresh count
-    sequence.observe(1e-6, 16)
+    sequence.observe(1.0, 1e6, 16)
     assert (sequence.rate, sequence.spp) == (1e-6, 16)
     low, high = HOLD_RANGE
     for affordable in (low * 16, 16.0, 19.0, high * 16):        # within the range: held
@@ -265,5 +265,18 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
     assert sequence.steady_count(low * 16 - 1.0, 4096) == 12    # too dear now: fewer
     assert sequence.steady_count(2 * 16, 4096) == 32            # much more time: more
     assert sequence.steady_count(16.0, 8) == 8                  # never above the ceiling
-    sequence.observe(0.0, 4)                                    # nothing measured: kept
+    sequence.observe(0.0, 1e6, 4)                               # nothing measured: kept
     assert sequence.spp == 16
+
+
+def test_a_later_frame_prices_a_sample_over_the_last_frames():
+    from xsl_render.core.sampling.guided_plan import RATE_WINDOW, SequenceBudget
+
+    sequence = SequenceBudget(per_frame=2.0, frames=8)
+    sequence.observe(1.0, 1e6, 16)
+    sequence.observe(3.0, 1e6, 16)                              # a dearer view: priced together
+    assert sequence.rate == pytest.approx(2e-6)
+    for _ in range(RATE_WINDOW):
+        sequence.observe(1.0, 2e6, 16)                          # the dear frame leaves the window
+    assert sequence.rate == pytest.approx(0.5e-6)
+    assert "recent" not in sequence.to_dict() and sequence.to_dict()["rate"] == sequence.rate

@@ -247,7 +247,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
                 phases["final"] = clock.now() - began
             if pace is not None and rendered_samples:
-                pace.observe(rendered_s / rendered_samples,
+                pace.observe(rendered_s, rendered_samples,
                              sobol_friendly(rendered_samples // (width * height)))
 
         began = clock.now()

@@ -43,7 +43,7 @@ Everything here is plain numbers; the clock is read by the caller.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -347,6 +347,11 @@ class BudgetPacer:
 #: A later frame of a guided range keeps the frame before's sample count while what it can
 #: afford stays within this range of it (``SequenceBudget.steady_count``).
 HOLD_RANGE = (0.85, 1.3)
+#: A later frame prices a sample at what the last this many frames paid for theirs, all
+#: together: a frame's own cost moves with what the camera sees (street: 3.4-4.9 s for the
+#: same 16 spp), and a count priced by the frame before alone followed those moves
+#: (``steady_count`` then let go of the count 4 times in 24 frames).
+RATE_WINDOW = 4
 #: A frame of a guided animation is never given less than this share of the per-frame budget,
 #: whatever the frames before it overran (a short sequence with a long first sync overruns
 #: its total instead of starving its frames).
@@ -370,10 +375,13 @@ class SequenceBudget:
     frames: int
     spent: float = 0.0
     done: int = 0
-    #: What the frame before measured: seconds per full-resolution pixel-sample (its final
-    #: pass, scene sync left out) and its samples per pixel. None before the first frame.
+    #: Seconds per full-resolution pixel-sample over the last ``RATE_WINDOW`` frames (their
+    #: final passes, scene sync left out), and the frame before's samples per pixel. None
+    #: before the first frame.
     rate: float | None = None
     spp: int | None = None
+    #: (seconds, pixel-samples) of those frames' final passes, oldest first.
+    recent: list = field(default_factory=list)
 
     def next_budget(self) -> float:
         """Seconds for the next frame, its scene sync not included."""
@@ -386,10 +394,13 @@ class SequenceBudget:
         self.spent += float(seconds)
         self.done += 1
 
-    def observe(self, rate: float, spp: int) -> None:
-        """What a frame's final pass cost per pixel-sample, and the count it rendered."""
-        if rate > 0.0:
-            self.rate, self.spp = float(rate), int(spp)
+    def observe(self, seconds: float, samples: float, spp: int) -> None:
+        """A frame's final pass took ``seconds`` for ``samples`` pixel-samples, ``spp`` per
+        pixel (a pass that measured nothing is left out)."""
+        if seconds > 0.0 and samples > 0:
+            self.recent = (self.recent + [(float(seconds), float(samples))])[-RATE_WINDOW:]
+            self.rate = sum(s for s, _ in self.recent) / sum(n for _, n in self.recent)
+            self.spp = int(spp)
 
     def steady_count(self, affordable: float, ceiling: int) -> int:
         """The samples per pixel of a later frame that can afford ``affordable``: the frame
@@ -402,4 +413,6 @@ class SequenceBudget:
         return sobol_friendly(max(1, min(int(affordable), ceiling)))
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        data = asdict(self)
+        del data["recent"]
+        return data
