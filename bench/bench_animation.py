@@ -17,10 +17,12 @@ loading, scene syncs, maps, denoising: every fixed cost inside the time):
    (``xsl-render compare`` on the sequences), the flicker measure, and the equal-quality
    speedup over the uniform curve on each (time = the whole process).
 3. **Guided's overhead over its frames**: the process's wall time against the sum of its
-   frames' render-only times (wall less Cycles' sync).
+   frames' render-only times (wall less Cycles' sync). ``--overhead`` measures only this, on
+   as many frames as asked (no references needed: the whole 24 in a few minutes).
 
     .venv/bin/python bench/bench_animation.py --out bench-animation --repeats 3
     .venv/bin/python bench/bench_animation.py --frames 1-8 --repeats 1      # a quick look
+    .venv/bin/python bench/bench_animation.py --overhead --skip-sessions --skip-quality
 
 Run it on an otherwise idle machine (the times are the measure).
 """
@@ -176,6 +178,25 @@ def quality(out: Path, frames: str, repeats: int) -> None:
         default=str))
 
 
+def guided_overhead(out: Path, frames: str, repeats: int) -> None:
+    """Guided over ``frames`` at uniform 16 spp's per-frame time: the whole process against
+    the sum of its frames' render-only times (issue 21's "within 1.15x")."""
+    uniform = median_run(repeats, lambda i: render_frames(out / "overhead" / f"uniform_{i}", frames,
+                                                          "--mode", "uniform", "--spp", 16))
+    budget = sum(stats["wall_s"] for stats in uniform["frames"]) / len(uniform["frames"])
+    guided = median_run(repeats, lambda i: render_frames(out / "overhead" / f"guided_{i}", frames,
+                                                         "--mode", "guided", "--time-budget", f"{budget:.3f}"))
+    render_only = sum(stats["wall_s"] - stats.get("cycles_sync_s", 0.0) for stats in guided["frames"])
+    frame_wall = sum(stats["wall_s"] for stats in guided["frames"])
+    n = len(guided["frames"])
+    print(f"\n## guided's overhead: {SCENE}, frames {frames} (median of {repeats})")
+    print(f"uniform 16 spp: process {uniform['seconds']:.1f} s, {budget:.2f} s a frame (its frames' wall)")
+    print(f"guided at that budget: process {guided['seconds']:.1f} s for {n} frames; frames' wall "
+          f"{frame_wall:.1f} s (budget {budget * n:.1f} s); render-only {render_only:.1f} s; "
+          f"process / render-only {guided['seconds'] / render_only:.3f}x; mean spp "
+          + ", ".join(f"{stats['mean_spp']:g}" for stats in guided["frames"]))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("bench-animation"))
@@ -185,11 +206,15 @@ def main(argv=None) -> int:
                         help="frames rendered one process each for the sessions table")
     parser.add_argument("--skip-sessions", action="store_true")
     parser.add_argument("--skip-quality", action="store_true")
+    parser.add_argument("--overhead", action="store_true",
+                        help="also guided's process time against its frames' render-only time")
     args = parser.parse_args(argv)
     if not args.skip_sessions:
         sessions(args.out, args.frames, args.separate_frames, args.repeats)
     if not args.skip_quality:
         quality(args.out, args.frames, args.repeats)
+    if args.overhead:
+        guided_overhead(args.out, args.frames, args.repeats)
     return 0
 
 
