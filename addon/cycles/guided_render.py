@@ -135,6 +135,15 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         image = PassAccumulator(width, height, 4)
         guides = PassAccumulator(width, height, 6)
         tiles: list[dict] = []
+
+        def keep(window, piece, spp: int) -> float:
+            """A final-pass render into the frame; its sample seconds (a scene sync Cycles
+            did on the way is not what a sample costs)."""
+            image.add(window, piece.pixels, spp)
+            guides.add(window, piece.guides, spp)
+            tiles.append(tile_entry(window, piece) | {"pass": "final"})
+            return piece.seconds - piece.sync_seconds
+
         with CyclesWindowRenderer(scene, options.seed, guides=True) as renderer:
             began = clock.now()
             side = min(_SYNC_WINDOW, width, height)
@@ -160,12 +169,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 yield 0.2, f"guided: the frame at {spp} spp"
                 clock.resume(paused)
                 began = clock.now()
-                piece = renderer.render(None, spp)
-                image.add((0, height, 0, width), piece.pixels, spp)
-                guides.add((0, height, 0, width), piece.guides, spp)
-                tiles.append(tile_entry((0, height, 0, width), piece) | {"pass": "final"})
+                rendered_s = keep((0, height, 0, width), renderer.render(None, spp), spp)
+                rendered_samples = spp * width * height
                 phases["final"] = clock.now() - began
-                rendered_s, rendered_samples = piece.seconds - piece.sync_seconds, spp * width * height
             else:
                 # The pilot: a quarter of the resolution, a first sample timing it, then as many
                 # as its share allows. (No Cycles time limit: a limit set and unset at the same
@@ -237,14 +243,10 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     spp = max(1, min(wanted, options.max_spp))
                     if final.flat:
                         spp = sobol_friendly(spp)
-                    piece = renderer.render(rect.window, spp)
-                    # (A scene sync Cycles did on the way is not what a sample costs.)
-                    pacer.record(piece.seconds - piece.sync_seconds, rate * spp * rect.area)
-                    rendered_s += piece.seconds - piece.sync_seconds
+                    seconds = keep(rect.window, renderer.render(rect.window, spp), spp)
+                    pacer.record(seconds, rate * spp * rect.area)
+                    rendered_s += seconds
                     rendered_samples += spp * rect.area
-                    image.add(rect.window, piece.pixels, spp)
-                    guides.add(rect.window, piece.guides, spp)
-                    tiles.append(tile_entry(rect.window, piece) | {"pass": "final"})
                 phases["final"] = clock.now() - began
             if pace is not None and rendered_samples:
                 pace.observe(rendered_s, rendered_samples,
