@@ -125,3 +125,31 @@ def test_bad_estimator_options_exit_2_before_blender(cli, blender, tmp_path, ext
     assert result.returncode == 2
     assert message in one_line_error(result)
     assert not (tmp_path / "o.exr").exists()
+
+
+def test_a_changed_estimator_reaches_cycles_in_one_persistent_session(blender):
+    """Cycles' volume settings are add-on properties, which do not tag the scene: with
+    persistent data Cycles kept rendering the step it synced first, even across a frame
+    change, while the stats recorded the new one. The renderer tags the scene when they
+    differ from what it synced last (and only then: the same settings render bit-identically)."""
+    from test_ray_marching import _two_media_scene
+
+    from xsl_render.addon.cycles.tile_render import forget_synced_volumes
+    from xsl_render.addon.scene.state import preserved_scene
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    forget_synced_volumes()
+    with preserved_scene(scene):
+        scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, 4.0
+        with CyclesWindowRenderer(scene, 0) as renderer:
+            coarse = renderer.render(None, 2).pixels
+            scene.cycles.volume_step_rate = 0.25
+            fine = renderer.render(None, 2).pixels
+        scene.cycles.volume_step_rate = 4.0
+        with CyclesWindowRenderer(scene, 0) as renderer:         # the next frame's renderer
+            again = renderer.render(None, 2).pixels
+            same = renderer.render(None, 2)
+    assert abs(float(fine.mean()) - float(coarse.mean())) > 1e-4
+    assert (again == coarse).all() and (same.pixels == coarse).all()
+    assert same.sync_seconds < 0.5

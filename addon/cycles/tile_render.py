@@ -45,6 +45,23 @@ from ..scene.probe import render_size
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
+#: The volume estimator settings Cycles last synced for a scene (its pointer) in this run's
+#: persistent session. They are add-on properties, which do not tag the scene: without a tag
+#: Cycles keeps rendering with the ones it synced first, also across a frame change (street:
+#: step rate 4 then 0.25 gave the same pixels). A render whose settings differ tags the
+#: scene (a full sync: milliseconds for ray marching, Blender 5's octree for null scattering).
+_synced_volumes: dict[int, tuple] = {}
+
+
+def forget_synced_volumes() -> None:
+    """A new run starts: what an earlier one synced is not known to hold (the artist may have
+    rendered since), so each scene's first render tags it."""
+    _synced_volumes.clear()
+
+
+def _volume_settings(scene) -> tuple:
+    cycles = scene.cycles
+    return bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6)
 
 
 @dataclass
@@ -196,7 +213,8 @@ class CyclesWindowRenderer:
                    self._assign(self.layer.cycles, "pass_debug_sample_count", counted),
                    # A new sample count resets Cycles' session, which re-reads the time limit;
                    # only a new limit at the same count needs the (costly) re-sync.
-                   new_limit and not new_count]
+                   new_limit and not new_count,
+                   _synced_volumes.get(scene.as_pointer()) != _volume_settings(scene)]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).
@@ -223,8 +241,12 @@ class CyclesWindowRenderer:
         if listen:
             bpy.app.handlers.render_stats.append(self._handler)
         started = time.perf_counter()
+        _synced_volumes[scene.as_pointer()] = _volume_settings(scene)
         try:
             result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
+        except BaseException:
+            _synced_volumes.pop(scene.as_pointer(), None)
+            raise
         finally:
             self._on_sample = None
             if listen:
