@@ -11,7 +11,12 @@
    frame shows as flicker).
 3. Pilot: the whole frame at a quarter of its resolution, one sample, then at most 16 for at
    most a small share of the budget (2 % when nothing is scored); the two renders' times
-   give the cost of a sample without a render's fixed cost.
+   give the cost of a sample without a render's fixed cost, and so the count the budget
+   affords. ``--estimator auto`` chose for the ceiling before (the pilot renders with that
+   choice, or with ray marching where it was null scattering: ``provisional_choice``); its
+   choice is now settled for the affordable count (``at_fewer_samples``), and where that
+   differs the scene syncs again and the pilot is rendered again. A later frame of a range
+   settles it for the count it renders at, before its sync.
 4. Scores (``exponent`` > 0 only): the pilot denoised, its display luminance's gradient per
    tile (``core/sampling/guided_plan``, which also says why the pilot is thrown away and why
    the default spreads the samples evenly instead).
@@ -29,6 +34,7 @@ Every setting touched is put back (``preserved_scene``) after success, error or 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -38,9 +44,11 @@ from ...core.sampling.guided_plan import (BudgetPacer, FinalPass, GuidedOptions,
 from ...core.sampling.pass_merge import PassAccumulator
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.tile_plan import Rect, check_director_map, tile_windows
+from ...core.sampling.volume_estimator import at_fewer_samples, provisional_choice
 from ...core.tonemap import standard_view
 from ..scene.state import preserved_scene
-from .selective_render import RenderOutcome, finish_image, prepare_render, render_stats, tile_entry
+from .selective_render import (RenderOutcome, apply_estimator, finish_image, prepare_render, render_stats,
+                               tile_entry)
 from .tile_render import CyclesWindowRenderer
 
 #: Pixels of the scene-sync render (as the equal-time baselines do it).
@@ -123,7 +131,16 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     guided.check()
     budget = guided.time_budget
     # Auto's estimator prediction ran before, inside the budget like the importance map.
-    chosen_s = options.volume_estimator().seconds
+    chosen = options.volume_estimator()
+    chosen_s = chosen.seconds
+    # A later frame of a range renders at the count the frames before held (its estimator
+    # was chosen for that count); any other frame learns its count from its pilot, which
+    # renders with auto's choice made for the ceiling, or ray marching where that was null
+    # scattering (``provisional_choice``), and settles the choice for that count after it.
+    later = pace is not None and bool(pace.rate) and not guided.exponent and importance is None
+    used = chosen if later else provisional_choice(chosen)
+    if used is not chosen:
+        options = replace(options, estimator_choice=used)
     clock = _Clock(already=map_seconds + chosen_s)
     phases: dict[str, float] = {"maps": map_seconds} | ({"estimator": chosen_s} if chosen_s else {})
     with preserved_scene(scene):
@@ -144,26 +161,67 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             tiles.append(tile_entry(window, piece) | {"pass": "final"})
             return piece.seconds - piece.sync_seconds
 
-        with CyclesWindowRenderer(scene, options.seed, guides=True) as renderer:
+        reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
+        reduce = pilot_reduce(width, height)
+
+        def sync(renderer) -> None:
+            """A 1-sample render of a few pixels: Cycles syncs the scene."""
+            nonlocal budget
             began = clock.now()
             side = min(_SYNC_WINDOW, width, height)
             row, col = (height - side) // 2, (width - side) // 2
             renderer.render((row, row + side, col, col + side), 1)
-            phases["sync"] = clock.now() - began
+            seconds = clock.now() - began
+            phases["sync"] = phases.get("sync", 0.0) + seconds
             if sync_outside:
-                budget += phases["sync"]
+                budget += seconds
 
-            reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-            reduce = pilot_reduce(width, height)
-            if pace is not None and pace.rate and not guided.exponent and importance is None:
+        def pilot_pass(renderer):
+            """The pilot: a quarter of the resolution, a first sample timing it, then as many
+            as its share allows; (its render, samples, seconds per full-resolution
+            pixel-sample). (No Cycles time limit: a limit set and unset at the same sample
+            count makes the renderer re-sync the scene, 3.7 s on balls_b.) A pilot that only
+            times the render (nothing scored) takes less."""
+            fraction = guided.pilot_fraction if guided.exponent else min(guided.pilot_fraction,
+                                                                         _CLOCK_PILOT_FRACTION)
+            pilot_share = fraction * (budget - clock.now() - reserve)
+            paused = clock.pause()
+            yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
+            clock.resume(paused)
+            began = clock.now()
+            first = renderer.render(None, 1, reduce=reduce)
+            fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
+            # (Two samples at least where the rate is all it measures: its two renders' times.)
+            have = max(1 if guided.exponent else min(2, options.max_spp),
+                       min(options.max_spp, _PILOT_MAX_SPP, fit))
+            pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
+            phases["pilot"] = phases.get("pilot", 0.0) + clock.now() - began
+            # No time limit: every pilot pixel has exactly ``have`` samples.
+            pixels = float(pilot.pixels.shape[0] * pilot.pixels.shape[1])
+            # Seconds per pixel-sample (a pilot pixel traces what a full one does per sample):
+            # from the two renders' difference, which leaves out a render's fixed cost.
+            rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / (have * pixels)
+            if have > 1 and pilot.seconds > first.seconds:
+                rate = max((pilot.seconds - first.seconds) / ((have - 1) * pixels), 0.5 * rate)
+            tiles.append(tile_entry((0, height, 0, width), pilot)
+                         | {"pass": "pilot", "resolution_divisor": reduce})
+            return pilot, have, rate
+
+        with CyclesWindowRenderer(scene, options.seed, guides=True) as renderer:
+            if later:
                 # A later frame of a range: the frame before measured what a full-resolution
                 # sample costs, so no pilot and no columns: one render of the whole frame, at
-                # the frame before's count while it fits (``SequenceBudget.steady_count``).
+                # the frame before's count while it fits (``SequenceBudget.steady_count``),
+                # with auto's choice settled for that count before the scene syncs (it was
+                # made ahead of the frames before, which had not yet told their count).
                 rate, have, reduce, pilot_seconds = pace.rate, 0, 1, 0.0
-                phases["pilot"] = phases["scoring"] = 0.0
                 denoise_reserve = reserve
                 left = budget - clock.now() - denoise_reserve - _RENDER_OVERHEAD_S
                 spp = pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp)
+                used = at_fewer_samples(chosen, spp, previous=pace.estimator)
+                apply_estimator(scene, used)            # (the renderer tags the scene for a change)
+                sync(renderer)
+                phases["pilot"] = phases["scoring"] = 0.0
                 final = FinalPass([Rect(0, height, 0, width, spp)], np.full(len(windows), float(spp)), flat=True)
                 paused = clock.pause()
                 yield 0.2, f"guided: the frame at {spp} spp"
@@ -173,34 +231,22 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 rendered_samples = spp * width * height
                 phases["final"] = clock.now() - began
             else:
-                # The pilot: a quarter of the resolution, a first sample timing it, then as many
-                # as its share allows. (No Cycles time limit: a limit set and unset at the same
-                # sample count makes the renderer re-sync the scene, 3.7 s on balls_b.)
-                # A pilot that only times the render (nothing scored) takes less.
-                fraction = guided.pilot_fraction if guided.exponent else min(guided.pilot_fraction,
-                                                                             _CLOCK_PILOT_FRACTION)
-                pilot_share = fraction * (budget - clock.now() - reserve)
-                paused = clock.pause()
-                yield 0.05, f"guided: pilot pass (1/{reduce} resolution, at most {pilot_share:.2f} s)"
-                clock.resume(paused)
-                began = clock.now()
-                first = renderer.render(None, 1, reduce=reduce)
-                fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
-                # (Two samples at least where the rate is all it measures: its two renders' times.)
-                have = max(1 if guided.exponent else min(2, options.max_spp),
-                           min(options.max_spp, _PILOT_MAX_SPP, fit))
-                pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
-                phases["pilot"] = clock.now() - began
-                # No time limit: every pilot pixel has exactly ``have`` samples.
-                pixels = float(pilot.pixels.shape[0] * pilot.pixels.shape[1])
-                # Seconds per pixel-sample (a pilot pixel traces what a full one does per sample):
-                # from the two renders' difference, which leaves out a render's fixed cost.
-                rate = max(pilot.seconds - _RENDER_OVERHEAD_S, 0.5 * pilot.seconds) / (have * pixels)
-                if have > 1 and pilot.seconds > first.seconds:
-                    rate = max((pilot.seconds - first.seconds) / ((have - 1) * pixels), 0.5 * rate)
+                sync(renderer)
+                pilot, have, rate = yield from pilot_pass(renderer)
+                # Auto's choice for the count the budget affords (the ceiling's tolerance is
+                # stricter than a run that never reaches it needs: street at 64 spp's chose
+                # null scattering, and its octree took 3.5-7 s of a 9 s budget).
+                count = max(1.0, (budget - clock.now() - reserve) / (rate * width * height))
+                settled = at_fewer_samples(chosen, min(count, options.max_spp))
+                if (settled.biased, settled.step_rate) != (used.biased, used.step_rate):
+                    paused = clock.pause()
+                    yield 0.1, f"guided: {settled.describe()} for the budget's {count:.0f} spp"
+                    clock.resume(paused)
+                    apply_estimator(scene, settled)     # (the renderer tags the scene for it)
+                    sync(renderer)
+                    pilot, have, rate = yield from pilot_pass(renderer)
+                used = settled
                 pilot_seconds = pilot.seconds
-                tiles.append(tile_entry((0, height, 0, width), pilot)
-                             | {"pass": "pilot", "resolution_divisor": reduce})
 
                 # Scores from the denoised pilot (none at exponent 0: every tile alike).
                 paused = clock.pause()
@@ -251,12 +297,16 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             if pace is not None and rendered_samples:
                 pace.observe(rendered_s, rendered_samples,
                              sobol_friendly(rendered_samples // (width * height)))
+            if pace is not None:
+                pace.estimator = used
 
         began = clock.now()
         merged, merged_guides = image.result(), guides.result()
         samples = image.samples.astype(np.float32)
         phases["composite"] = clock.now() - began
         merged = finish_image(merged, merged_guides if options.denoise else None, options, phases)
+        if used is not options.volume_estimator():
+            options = replace(options, estimator_choice=used)
         stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings)
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
@@ -270,4 +320,4 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         warnings.append(f"the render took {stats.wall_s:.2f} s of a {budget:g} s budget "
                         f"(scene sync {phases['sync']:.2f} s, pilot {phases['pilot']:.2f} s at {have} spp)")
     yield 1.0, "guided: done"
-    return RenderOutcome(merged, samples, stats, warnings)
+    return RenderOutcome(merged, samples, stats, warnings, estimator_choice=used)

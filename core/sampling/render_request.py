@@ -163,8 +163,9 @@ class RenderRequest:
     def estimator_spp(self) -> float:
         """The samples per pixel the run gives its pixels at most, which sets how much bias
         the estimator ``auto`` tolerates: its sample count when it has one (uniform), a time
-        budget's ceiling (or ``GUIDED_SPP`` without one), the ceiling otherwise (xs and xsl
-        give some pixels that many)."""
+        budget's ceiling (or ``GUIDED_SPP`` without one; guided settles the choice for the
+        count its pilot finds affordable, ``volume_estimator.at_fewer_samples``), the ceiling
+        otherwise (xs and xsl give some pixels that many)."""
         if self.spp:
             return float(self.spp)
         if self.traits.time_budget and not self.options.has_ceiling:

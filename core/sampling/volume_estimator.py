@@ -5,7 +5,9 @@
 - ``biased``: ray marching at the scene's step rate, or at ``step_rate`` when given.
 - ``auto``: ray marching at the largest candidate step rate whose predicted visible bias
   stays below the noise the run's samples leave; else at the finest rate while its bias stays
-  within twice that (``NULL_SCATTERING_MARGIN``); else null scattering.
+  within twice that (``NULL_SCATTERING_MARGIN``); else null scattering. A run that learns its
+  count only while it renders (a time budget) chooses for its ceiling, renders its pilot
+  with ``provisional_choice`` and settles with ``at_fewer_samples`` once the count is known.
 
 Why ray marching pays: Blender 5 builds a majorant octree for null scattering at every scene
 sync (3.2-3.7 s on the noise-fog example scenes, more than a 16-spp render at 256x144), and
@@ -29,7 +31,7 @@ to 64 spp. 0.05 puts 4 spp's tolerance at 2.5 %, 16 spp's at 1.25 % and 64 spp's
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -181,6 +183,45 @@ def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
     rate = ordered[best]
     kept = " (the previous frame's)" if best == start else ""
     return _marching(rate, tried, tolerance, spp, kept)
+
+
+def chosen_spp(choice: EstimatorChoice) -> float:
+    """The samples per pixel an auto choice was made for (from its tolerance)."""
+    return (NOISE_AT_ONE_SPP / choice.tolerance) ** 2
+
+
+def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
+    """What a time-budgeted run renders its pilot with, before it knows the count its budget
+    affords (``at_fewer_samples`` then settles the choice): auto's ray-marching choice as it
+    is, and where auto chose null scattering, ray marching at the finest rate it predicted.
+    Ray marching syncs the scene in milliseconds; null scattering builds Blender 5's octree
+    (seconds), which a pilot that ends in ray marching would have paid for nothing. Choices
+    other than auto's, or without predictions, are returned unchanged."""
+    if choice.estimator != "auto" or choice.biased is not False or not choice.tried:
+        return choice
+    finest = min(choice.tried)
+    return EstimatorChoice("auto", biased=True, step_rate=finest, predicted_bias=choice.tried[finest],
+                           tolerance=choice.tolerance, tried=choice.tried,
+                           reason=f"provisional: the finest rate, until the budget's count is known "
+                                  f"({choice.reason})", seconds=choice.seconds)
+
+
+def at_fewer_samples(choice: EstimatorChoice, spp: float,
+                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
+    """Auto's ``choice`` made again for a run that gives its pixels ``spp`` samples, from the
+    predictions it holds (no new ones): a time budget's count, known only after its pilot,
+    is often below the ceiling the choice was made for, and a larger tolerance may admit a
+    coarser step. ``spp`` above the choice's own count is taken as that count (finer rates
+    than it tried would be needed); a rate it did not try counts as failing. ``previous``: the
+    frame before's choice, kept with ``choose_step_rate``'s hysteresis. Choices other than
+    auto's, or without predictions, are returned unchanged."""
+    if choice.estimator != "auto" or choice.biased is None or not choice.tried or not choice.tolerance:
+        return choice
+    spp = min(float(spp), chosen_spp(choice))
+    tried = dict(choice.tried)
+    again = choose_step_rate(lambda rate: tried.get(rate, math.inf), spp, rates=tuple(sorted(tried)),
+                             previous=previous)
+    return replace(again, tried=tried, seconds=choice.seconds)
 
 
 def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dict,

@@ -1,0 +1,139 @@
+"""A time-budgeted run settles auto's estimator for the count its budget affords.
+
+Auto chooses before rendering, for a count of samples per pixel; a guided render learns its
+count only from its pilot. The choice made for its ceiling is stricter than a run that never
+reaches the ceiling needs (street at 64 spp's tolerance chose null scattering, whose octree
+took most of a 16-spp budget), so the pilot renders with a provisional choice and the render
+settles it afterwards, from the predictions already made.
+"""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, at_fewer_samples,
+                                                       choose_step_rate, chosen_spp, fixed_choice,
+                                                       provisional_choice, tolerated_bias)
+
+#: Visible-bias measures of a scene, coarse to fine (the two-media test scene's, rounded).
+MEASURES = {4.0: 0.16, 2.0: 0.11, 1.0: 0.04, 0.5: 0.008, 0.25: 0.0018}
+
+
+def _auto(spp: float) -> EstimatorChoice:
+    return choose_step_rate(MEASURES.__getitem__, spp)
+
+
+@pytest.mark.parametrize("ceiling, count, rate", [
+    (4096, 1024, 0.25),      # null at the ceiling; 0.25 passes at 1024 spp
+    (4096, 16, 0.5),
+    (64, 4, 0.5),            # 0.25 at the ceiling, 0.5 at 4 spp
+    (64, 1, 1.0),
+    (16, 64, 0.5),           # more than the choice's count: its own count
+])
+def test_a_smaller_count_settles_on_the_rate_auto_chooses_for_it(ceiling, count, rate):
+    settled = at_fewer_samples(_auto(ceiling), count)
+    assert settled.biased and settled.step_rate == rate
+    assert settled == _auto(min(count, ceiling)) or settled.tried != _auto(min(count, ceiling)).tried
+    assert settled.step_rate == _auto(min(count, ceiling)).step_rate
+    assert settled.tolerance == pytest.approx(tolerated_bias(min(count, ceiling)))
+
+
+def test_settling_needs_no_new_prediction():
+    calls = []
+
+    def measure(rate):
+        calls.append(rate)
+        return MEASURES[rate]
+
+    at_ceiling = choose_step_rate(measure, 4096)
+    asked = len(calls)
+    assert at_fewer_samples(at_ceiling, 4).step_rate == 0.5
+    assert len(calls) == asked
+    assert at_fewer_samples(at_ceiling, 4).tried == at_ceiling.tried
+
+
+def test_the_provisional_choice_marches_where_auto_chose_null_scattering():
+    null = _auto(1e6)
+    assert null.biased is False
+    provisional = provisional_choice(null)
+    assert provisional.biased and provisional.step_rate == 0.25
+    assert chosen_spp(provisional) == pytest.approx(1e6)
+    marching = _auto(64)
+    assert provisional_choice(marching) is marching
+
+
+@pytest.mark.parametrize("choice", [
+    fixed_choice("scene", None), fixed_choice("unbiased", None), fixed_choice("biased", 2.0),
+    EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
+                    reason="homogeneous media only"),
+    EstimatorChoice("auto", biased=False, reason="a medium only Cycles evaluates"),
+])
+def test_choices_without_predictions_stay_as_they_are(choice):
+    assert provisional_choice(choice) is choice
+    assert at_fewer_samples(choice, 4) is choice
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_guided_switches_to_the_settled_estimator_and_restores_the_scene(blender, monkeypatch):
+    """The pilot renders with the provisional choice; a settled choice that differs is what
+    Cycles renders the final pass with (after a new sync and pilot), what the stats record
+    and what the render hands on; the scene's own settings come back."""
+    from test_ray_marching import _two_media_scene
+
+    from xsl_render.addon.cycles import guided_render
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+    from xsl_render.addon.maps.estimator_choice import with_estimator_choice
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.core.sampling.guided_plan import GuidedOptions
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = 48, 27
+    scene.cycles.volume_biased, scene.cycles.volume_step_rate = False, 1.7
+    before = settings_dump(scene)
+    options = with_estimator_choice(scene, RenderOptions(max_spp=4096, estimator="auto").check(), 4096)
+    assert options.estimator_choice.biased is False             # null scattering at the ceiling
+    seen, settled = [], EstimatorChoice("auto", True, 2.0, 0.11, 0.1, dict(MEASURES), "forced")
+    real_render = CyclesWindowRenderer.render
+
+    def spying(self, *args, **kwargs):
+        seen.append((self.scene.cycles.volume_biased, round(self.scene.cycles.volume_step_rate, 3)))
+        return real_render(self, *args, **kwargs)
+
+    monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
+    monkeypatch.setattr(guided_render, "at_fewer_samples", lambda choice, spp: settled)
+    outcome = guided_render.render_guided(scene, options, GuidedOptions(time_budget=3.0))
+    # sync and pilot (1 + more samples) provisional, then sync, pilot and the final pass settled
+    assert seen[0] == (True, 0.25) and seen[-1] == (True, 2.0)
+    assert seen.index((True, 2.0)) >= 2 and set(seen) == {(True, 0.25), (True, 2.0)}
+    assert outcome.estimator_choice is settled
+    assert outcome.stats.estimator["step_rate"] == 2.0 and outcome.stats.estimator["reason"] == "forced"
+    assert outcome.stats.phases_s["estimator"] == pytest.approx(options.estimator_choice.seconds)
+    assert settings_dump(scene) == before
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_a_guided_range_chooses_later_frames_for_the_count_it_holds(cli, blender, tmp_path):
+    """The first frame settles its choice for its pilot's count; each later frame's, made
+    ahead of it at the ceiling, for the count it renders at (the one the frames before held,
+    while it fits): never null scattering's octree for a count that does not need it."""
+    from test_ray_marching import _two_media_scene
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = 48, 27
+    path = tmp_path / "two.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(path))
+    stats_path = tmp_path / "f.json"
+    result = cli("render", path, "--mode", "guided", "--time-budget", "2", "--max-spp", "4096",
+                 "--frames", "1-3", "--out", tmp_path / "f_#.exr", "--stats", stats_path, "--quiet")
+    assert result.returncode == 0, result.stderr
+    frames = json.loads(stats_path.read_text())["frames"]
+    first = frames[0]["estimator"]
+    assert first["biased"] is True                  # settled: never null scattering's octree
+    assert first["tolerance"] > tolerated_bias(4096)
+    for frame in frames[1:]:
+        assert frame["estimator"]["biased"] is True
+        assert frame["estimator"]["tolerance"] == pytest.approx(tolerated_bias(frame["mean_spp"]))
