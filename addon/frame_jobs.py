@@ -185,13 +185,11 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 
 
 def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: RenderOptions,
-                    spp: float | Callable[[], float]) -> FrameJob:
+                    spp: float) -> FrameJob:
     """The frame job ``make_job(options)`` with ``--estimator auto`` chosen for each frame
-    (its media may move) before the frame's maps and renders, inside its time, for ``spp``
-    samples per pixel (a callable: asked again for each frame). Each frame's choice starts
-    from the frame before's (hysteresis: ``choose_step_rate``), so the step, and the bias
-    with it, does not switch back and forth over a sequence; a render that settles the choice
-    itself (guided, for its budget's count) passes on the one it rendered with."""
+    (its media may move) before the frame's maps and renders, inside its time. Each frame's
+    choice starts from the frame before's (hysteresis: ``choose_step_rate``), so the step,
+    and the bias with it, does not switch back and forth over a sequence."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return make_job(options)
     share = make_job(options).share
@@ -199,8 +197,7 @@ def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: Rend
 
     def prepare(scene) -> Steps[tuple]:
         yield 0.0, "choosing the volume estimator"
-        count = spp() if callable(spp) else spp
-        chosen = with_estimator_choice(scene, options, count, previous[-1] if previous else None)
+        chosen = with_estimator_choice(scene, options, spp, previous[-1] if previous else None)
         previous[:] = [chosen.estimator_choice]
         job = make_job(chosen)
         inner = None
@@ -210,10 +207,7 @@ def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: Rend
 
     def render(scene, prepared) -> Steps[FrameResult]:
         job, inner = prepared
-        result = yield from job.render(scene, inner)
-        if result.outcome.estimator_choice is not None:
-            previous[:] = [result.outcome.estimator_choice]
-        return result
+        return (yield from job.render(scene, inner))
 
     return FrameJob(render, prepare, share)
 

@@ -54,14 +54,7 @@ def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = Non
         return single_render_frame(lambda scene: render(scene, request, chosen, progress), request.mode,
                                    announce=progress is None)
 
-    def held_count() -> float:
-        # A later frame of a guided range renders at the count the frames before held
-        # (``SequenceBudget.steady_count``): auto's tolerance is that count's.
-        held = sequence.spp
-        return request.estimator_spp if not held else min(request.estimator_spp, float(held))
-
-    in_range = traits.time_budget and sequence is not None
-    return estimated_frame(make, request.options, held_count if in_range else request.estimator_spp)
+    return estimated_frame(make, request.options, request.estimator_spp)
 
 
 def _gold(scene, request: RenderRequest, options: RenderOptions, progress):

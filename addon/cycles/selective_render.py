@@ -30,7 +30,6 @@ from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
-from ...core.sampling.volume_estimator import EstimatorChoice
 from ..scene.probe import camera_model, render_size
 from ..scene.state import preserved_scene
 from .tile_render import CyclesWindowRenderer, RenderedWindow
@@ -50,9 +49,6 @@ class RenderOutcome:
     samples: np.ndarray                     # (H, W) float32 samples per pixel
     stats: RenderStats
     warnings: list[str] = field(default_factory=list)
-    #: The volume estimator the run ended with, when it chose one itself (guided settles
-    #: auto's choice for its budget's count): the next frame of a range starts from it.
-    estimator_choice: EstimatorChoice | None = None
 
 
 def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:

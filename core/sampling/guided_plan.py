@@ -382,9 +382,6 @@ class SequenceBudget:
     spp: int | None = None
     #: (seconds, pixel-samples) of those frames' final passes, oldest first.
     recent: list = field(default_factory=list)
-    #: The volume estimator the frame before rendered with (an ``EstimatorChoice``; None
-    #: before the first frame): a later frame settles auto's choice for its count from it.
-    estimator: object = None
 
     def next_budget(self) -> float:
         """Seconds for the next frame, its scene sync not included."""
@@ -417,5 +414,5 @@ class SequenceBudget:
 
     def to_dict(self) -> dict:
         data = asdict(self)
-        del data["recent"], data["estimator"]
+        del data["recent"]
         return data

@@ -206,21 +206,18 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
                                   f"({choice.reason})", seconds=choice.seconds)
 
 
-def at_fewer_samples(choice: EstimatorChoice, spp: float,
-                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
+def at_fewer_samples(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
     """Auto's ``choice`` made again for a run that gives its pixels ``spp`` samples, from the
     predictions it holds (no new ones): a time budget's count, known only after its pilot,
     is often below the ceiling the choice was made for, and a larger tolerance may admit a
     coarser step. ``spp`` above the choice's own count is taken as that count (finer rates
-    than it tried would be needed); a rate it did not try counts as failing. ``previous``: the
-    frame before's choice, kept with ``choose_step_rate``'s hysteresis. Choices other than
-    auto's, or without predictions, are returned unchanged."""
+    than it tried would be needed). Choices other than auto's, or without predictions, are
+    returned unchanged."""
     if choice.estimator != "auto" or choice.biased is None or not choice.tried or not choice.tolerance:
         return choice
     spp = min(float(spp), chosen_spp(choice))
     tried = dict(choice.tried)
-    again = choose_step_rate(lambda rate: tried.get(rate, math.inf), spp, rates=tuple(sorted(tried)),
-                             previous=previous)
+    again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
     return replace(again, tried=tried, seconds=choice.seconds)
 
 
