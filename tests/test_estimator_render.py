@@ -153,3 +153,18 @@ def test_a_changed_estimator_reaches_cycles_in_one_persistent_session(blender):
     assert abs(float(fine.mean()) - float(coarse.mean())) > 1e-4
     assert (again == coarse).all() and (same.pixels == coarse).all()
     assert same.sync_seconds < 0.5
+
+
+def test_an_equal_time_run_counts_autos_prediction_inside_its_time(blender):
+    """``uniform --equal-time S --estimator auto`` took S plus the prediction (street: 12.2 s
+    for 10 s): the time Cycles may render for is what the prediction left."""
+    from dataclasses import replace
+
+    from xsl_render.core.sampling.volume_estimator import fixed_choice
+
+    scene = build_fog_scene(blender, W, H)
+    predicted = replace(fixed_choice("biased", 1.0), estimator="auto", seconds=1.5)
+    options = RenderOptions(max_spp=4096, estimator="auto", estimator_choice=predicted).check()
+    outcome = sr.render_uniform(scene, options, seconds=2.5)
+    assert outcome.stats.time_limit_s <= 2.5 - 1.5
+    assert outcome.stats.phases_s["estimator"] == 1.5

@@ -232,7 +232,9 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                 row, col = (height - min(height, _WARMUP_SIZE)) // 2, (width - min(width, _WARMUP_SIZE)) // 2
                 renderer.render((row, row + min(height, _WARMUP_SIZE), col, col + min(width, _WARMUP_SIZE)), 1,
                                 adaptive_threshold=adaptive_threshold, time_limit=time_budget)
-                time_limit = max(0.01, time_budget - (time.perf_counter() - started))
+                # (Auto's prediction ran before, inside the budget, as guided counts it.)
+                spent = time.perf_counter() - started + options.volume_estimator().seconds
+                time_limit = max(0.01, time_budget - spent)
                 began = time.perf_counter()
 
                 def on_sample(done, total):
