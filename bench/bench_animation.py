@@ -14,7 +14,8 @@ loading, scene syncs, maps, denoising: every fixed cost inside the time):
    per-frame budget uniform 16 and 32 spp took; ``xsl`` (the paper's map, ceiling 64) for
    its flicker. Per run: the means over frames of mean FLIP,
    the 95th percentile of 32-px tile FLIP, the share of pixels above FLIP 0.103 and MSE
-   (``xsl-render compare`` on the sequences), the flicker measure, and the equal-quality
+   (``xsl-render compare`` on the sequences), the flicker measure, ColorVideoVDP's JOD of
+   the frames played as a video at 24 fps (where it is installed), and the equal-quality
    speedup over the uniform curve on each (time = the whole process).
 3. **Guided's overhead over its frames**: the process's wall time against the sum of its
    frames' render-only times (wall less Cycles' sync). ``--overhead`` measures only this, on
@@ -68,13 +69,15 @@ def render_frames(folder: Path, frames: str, *args) -> dict:
     return {"seconds": seconds, "frames": stats["frames"]}
 
 
-def measure(reference: Path, folder: Path, frames: str) -> dict:
-    """``xsl-render compare`` of the run's frames against the references."""
+def measure(reference: Path, folder: Path, frames: str, video: bool) -> dict:
+    """``xsl-render compare`` of the run's frames against the references (with ``video``,
+    ColorVideoVDP's JOD of the sequence played at 24 fps too; per-frame VDP is not asked)."""
     _, _ = xsl("compare", reference / "frame_####.exr", folder / "frame_####.exr", "--frames", frames,
-               "--no-vdp", "--json", folder / "compare.json")
+               *(() if video else ("--no-vdp",)), "--json", folder / "compare.json")
     summary = json.loads((folder / "compare.json").read_text())["sequence"]
     values = {metric: summary["mean"][metric] for metric in METRICS}
     values["flicker"] = summary["flicker"]["flicker"]
+    values["jod"] = summary["vdp"].get("jod")
     return values
 
 
@@ -117,7 +120,11 @@ def sessions(out: Path, frames: str, count: int, repeats: int) -> None:
 
 
 def quality(out: Path, frames: str, repeats: int) -> None:
-    from xsl_render.core.validation.curves import Point, equal_quality_speedup
+    from xsl_render.core.validation.curves import Point, as_error, equal_quality_speedup
+    from xsl_render.core.validation.vdp import vdp_unavailable_reason
+
+    video = vdp_unavailable_reason() is None
+    criteria = METRICS + ("flicker",) + (("jod",) if video else ())
 
     reference = out / "reference"
     xsl("reference", scene_path(), "--frames", frames, "--max-spp", MAX_SPP, "--quiet",
@@ -131,7 +138,7 @@ def quality(out: Path, frames: str, repeats: int) -> None:
             return result | {"folder": folder}
 
         chosen = median_run(repeats, once)
-        chosen["metrics"] = measure(reference, chosen["folder"], frames)
+        chosen["metrics"] = measure(reference, chosen["folder"], frames, video)
         runs[name] = chosen
         return chosen
 
@@ -148,21 +155,25 @@ def quality(out: Path, frames: str, repeats: int) -> None:
 
     print(f"\n## quality along the sequence: {SCENE}, frames {frames} (median of {repeats}; times "
           "are whole processes)")
-    print("| run | s | mean FLIP | p95 tile FLIP | FLIP>0.103 % | MSE | flicker |")
-    print("|---|---|---|---|---|---|---|")
+    print("| run | s | mean FLIP | p95 tile FLIP | FLIP>0.103 % | MSE | flicker | video JOD |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, result in runs.items():
         m = result["metrics"]
+        jod = "n/a" if m["jod"] is None else f"{m['jod']:.3f}"
         print(f"| {name} | {result['seconds']:.1f} | {m['flip']:.4f} | {m['flip_tile95']:.4f} | "
-              f"{m['flip_share']:.2f} | {m['mse']:.3g} | {m['flicker']:.4f} |")
+              f"{m['flip_share']:.2f} | {m['mse']:.3g} | {m['flicker']:.4f} | {jod} |")
+    if not video:
+        print(f"(video JOD not measured: {vdp_unavailable_reason()})")
     print("\nequal-quality speedup over uniform (scene settings), each metric:")
     for name, result in runs.items():
         if name.startswith("uniform"):
             continue
         cells = []
-        for metric in METRICS + ("flicker",):
-            curve = [Point(r["seconds"], r["metrics"][metric], n) for n, r in runs.items()
+        for metric in criteria:
+            curve = [Point(r["seconds"], as_error(metric, r["metrics"][metric]), n) for n, r in runs.items()
                      if n.startswith("uniform")]
-            speedup = equal_quality_speedup(curve, result["metrics"][metric], result["seconds"])
+            speedup = equal_quality_speedup(curve, as_error(metric, result["metrics"][metric]),
+                                            result["seconds"])
             value = "n/a" if speedup.value is None else f"{speedup.value:.2f}x" + ("*" if speedup.extrapolated else "")
             cells.append(f"{metric} {value}")
         print(f"  {name}: " + ", ".join(cells))

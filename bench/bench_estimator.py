@@ -15,8 +15,9 @@ every run; cached after the first render) with these curves:
 It prints per scene the auto and guided runs' equal-quality speedups over uniform with the
 scene's settings and over the best fixed step rate in hindsight (the lower envelope of every
 biased curve), on mean FLIP, the 95th percentile of 32-px region FLIP, the share of pixels
-above FLIP 0.103 and MSE; then each curve's points. Run it on an otherwise idle machine (the
-times are the measure).
+above FLIP 0.103 and MSE, and ColorVideoVDP's JOD (over uniform and over auto) where it is
+installed; then each curve's points. ``street`` (the moving example's first frame) is not in
+the default set. Run it on an otherwise idle machine (the times are the measure).
 
     .venv/bin/python bench/bench_estimator.py --out bench-estimator --repeats 3
     .venv/bin/python bench/bench_estimator.py --scenes balls_b --repeats 1
@@ -28,11 +29,13 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENES = ("road", "balls_a", "balls_b", "statue")
-HETEROGENEOUS = {"balls_b", "statue"}
+SCENES = ("road", "balls_a", "balls_b", "statue", "street")
+HETEROGENEOUS = {"balls_b", "statue", "street"}
 #: Half the scenes' own sizes where their converged references would take 10+ minutes on two
 #: cores (the sizes the issue's first measurements used); road at its own (its reference ships).
-SIZES = {"road": (512, 288), "balls_a": (256, 192), "balls_b": (256, 192), "statue": (192, 256)}
+#: street (the moving example) at its own size, its first frame.
+SIZES = {"road": (512, 288), "balls_a": (256, 192), "balls_b": (256, 192), "statue": (192, 256),
+         "street": (256, 144)}
 RATES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 METRICS = ("flip", "flip_tile95", "flip_share", "mse")
 FLOOR_SPP = 256
@@ -78,11 +81,12 @@ def report_scene(scene: str, data: dict) -> list[str]:
     from xsl_render.core.validation.curves import speedups_against
 
     size = data["scene"]["size"]
+    metrics = METRICS + (("jod",) if any(run.get("jod") is not None for run in data["runs"].values()) else ())
     lines = [f"\n{scene} ({size[0]}x{size[1]}, {len(data['seeds'])} repeat(s), reference "
              f"{data['reference']['inputs']['spp']} spp)",
              f"{'run':28s} {'s':>6s} {'FLIP':>7s} {'p95tile':>7s} {'>0.103%':>7s} {'MSE':>9s} "
              f"{'chosen':>10s} | vs uniform: FLIP p95tile share MSE | vs best fixed: FLIP p95tile share MSE"
-             " | vs auto: FLIP p95tile share MSE"]
+             " | vs auto: FLIP p95tile share MSE" + (" | JOD, vs uniform, vs auto" if "jod" in metrics else "")]
     best = {"best_fixed": _best_fixed(data)} if _best_fixed(data) else {}
     # The auto curve as a baseline: what a guided run adds to plain uniform sampling with
     # the same estimator choice.
@@ -95,7 +99,7 @@ def report_scene(scene: str, data: dict) -> list[str]:
         over = run["speedups"].get("uniform", {})
         against = speedups_against(best, (name, run["seconds"], run), METRICS).get("best_fixed", {})
         over_auto = ({} if run["curve"] == "auto" else
-                     speedups_against(auto, (name, run["seconds"], run), METRICS).get("auto", {}))
+                     speedups_against(auto, (name, run["seconds"], run), metrics).get("auto", {}))
 
         def fmt(speedups, metric):
             entry = speedups.get(metric) or {}
@@ -107,7 +111,9 @@ def report_scene(scene: str, data: dict) -> list[str]:
                      f"{run['mse'] or 0:9.2e} {rate:>10s} | "
                      + " ".join(fmt(over, m) for m in METRICS) + " | "
                      + " ".join(fmt(against, m) for m in METRICS) + " | "
-                     + " ".join(fmt(over_auto, m) for m in METRICS))
+                     + " ".join(fmt(over_auto, m) for m in METRICS)
+                     + (f" | {run.get('jod') or 0:6.3f} {fmt(over, 'jod')} {fmt(over_auto, 'jod')}"
+                        if "jod" in metrics else ""))
     lines.append("speedup = time the curve needs for the run's error / the run's time; "
                  "* extrapolated beyond the curve's measured range")
     return lines
@@ -135,6 +141,7 @@ def main(argv=None) -> int:
     size = tuple(int(v) for v in args.resolution.lower().split("x")) if args.resolution else None
 
     from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves
+    from xsl_render.core.validation.vdp import vdp_unavailable_reason
 
     lines = [f"bench_estimator: {', '.join(scenes)} at {args.resolution or 'SIZES'}, "
              f"ceiling 64, median of {args.repeats}"]
@@ -143,7 +150,7 @@ def main(argv=None) -> int:
         if args.no_guided:
             curves = tuple(c for c in curves if not c.startswith("guided_"))
         settings = CurvesSettings(ceiling=64, resolution=size or SIZES[scene], repeats=args.repeats, curves=curves,
-                                  vdp=False)
+                                  vdp=vdp_unavailable_reason() is None)     # JOD where installed
         data = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)
         scene_lines = report_scene(scene, data)
         print("\n".join(scene_lines), flush=True)
