@@ -61,6 +61,8 @@ def test_the_provisional_choice_marches_where_auto_chose_null_scattering():
     assert chosen_spp(provisional) == pytest.approx(1e6)
     marching = _auto(64)
     assert provisional_choice(marching) is marching
+    hopeless = choose_step_rate(lambda rate: 0.5, 64)          # 50 %: null at any count
+    assert hopeless.biased is False and provisional_choice(hopeless) is hopeless
 
 
 @pytest.mark.parametrize("choice", [

@@ -196,10 +196,13 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
     is, and where auto chose null scattering, ray marching at the finest rate it predicted.
     Ray marching syncs the scene in milliseconds; null scattering builds Blender 5's octree
     (seconds), which a pilot that ends in ray marching would have paid for nothing. Choices
-    other than auto's, or without predictions, are returned unchanged."""
+    other than auto's, without predictions, or whose finest rate no count would accept (not
+    even one sample per pixel), are returned unchanged."""
     if choice.estimator != "auto" or choice.biased is not False or not choice.tried:
         return choice
     finest = min(choice.tried)
+    if choice.tried[finest] > NULL_SCATTERING_MARGIN * tolerated_bias(1):
+        return choice
     return EstimatorChoice("auto", biased=True, step_rate=finest, predicted_bias=choice.tried[finest],
                            tolerance=choice.tolerance, tried=choice.tried,
                            reason=f"provisional: the finest rate, until the budget's count is known "
