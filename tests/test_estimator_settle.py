@@ -65,6 +65,16 @@ def test_the_provisional_choice_marches_where_auto_chose_null_scattering():
     assert hopeless.biased is False and provisional_choice(hopeless) is hopeless
 
 
+def test_a_range_keeps_null_scattering_without_predicting():
+    from xsl_render.core.sampling.volume_estimator import kept_null_scattering
+
+    kept = kept_null_scattering(_auto(1e6), 64)
+    assert kept.biased is False and kept.tried is None
+    assert kept.tolerance == pytest.approx(tolerated_bias(64))
+    for previous in (None, _auto(64), fixed_choice("unbiased", None), fixed_choice("scene", None)):
+        assert kept_null_scattering(previous, 64) is None
+
+
 @pytest.mark.parametrize("choice", [
     fixed_choice("scene", None), fixed_choice("unbiased", None), fixed_choice("biased", 2.0),
     EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
@@ -134,6 +144,8 @@ def test_a_guided_range_keeps_the_choice_made_for_its_ceiling(cli, blender, tmp_
     frames = json.loads((tmp_path / "f.json").read_text())["frames"]
     assert [f["estimator"]["tolerance"] for f in frames] == pytest.approx([tolerated_bias(4096)] * 2)
     assert [f["estimator"]["biased"] for f in frames] == [False, False]
+    assert frames[0]["estimator"]["tried"] and frames[1]["estimator"]["tried"] is None   # kept
+    assert frames[1]["cycles_sync_s"] < 0.5 * frames[0]["cycles_sync_s"] + 0.05
     still = cli("render", path, *common, "--out", tmp_path / "s.exr", "--stats", tmp_path / "s.json")
     assert still.returncode == 0, still.stderr
     chosen = json.loads((tmp_path / "s.json").read_text())["estimator"]

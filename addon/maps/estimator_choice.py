@@ -16,7 +16,7 @@ from ...core.maps.transmittance import medium_segments
 from ...core.media.ray_marching import MarchingPredictor, sample_pixels
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.volume_estimator import (EstimatorChoice, choose_step_rate, fixed_choice,
-                                               visible_bias)
+                                               kept_null_scattering, visible_bias)
 from ..scene.geometry import scan_scene
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
@@ -38,10 +38,14 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
     ``options.estimator`` other than auto is taken as given; auto predicts (module notes),
     never trying a step rate above ``options.step_rate`` when one is given, and keeping
     ``previous`` (the frame before's choice) unless the prediction clearly says otherwise
-    (``choose_step_rate``).
+    (``choose_step_rate``); a previous null scattering is kept without predicting
+    (``kept_null_scattering``).
     """
     if options.estimator != "auto":
         return fixed_choice(options.estimator, options.step_rate)
+    kept = kept_null_scattering(previous, spp)
+    if kept is not None:
+        return kept
     import bpy
 
     started = time.perf_counter()
