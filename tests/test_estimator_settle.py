@@ -150,3 +150,21 @@ def test_a_guided_range_keeps_the_choice_made_for_its_ceiling(cli, blender, tmp_
     assert still.returncode == 0, still.stderr
     chosen = json.loads((tmp_path / "s.json").read_text())["estimator"]
     assert chosen["biased"] is True and chosen["tolerance"] > tolerated_bias(4096)
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_guided_with_a_fixed_estimator_records_its_options_as_given(blender):
+    """Only auto's choice is settled: a fixed estimator's options reach the stats unchanged."""
+    from test_ray_marching import _two_media_scene
+
+    from xsl_render.addon.cycles.guided_render import render_guided
+    from xsl_render.core.sampling.guided_plan import GuidedOptions
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 18
+    options = RenderOptions(max_spp=8, estimator="scene").check()
+    outcome = render_guided(scene, options, GuidedOptions(time_budget=1.0))
+    assert outcome.stats.options == options.to_dict()
+    assert outcome.stats.estimator["estimator"] == "scene"

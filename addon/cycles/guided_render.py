@@ -139,8 +139,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     # null scattering's octree once for all its frames, and there ray marching's cost per
     # sample decides (street, frames 1-8 in one session: ray marching at rate 0.25 took 1.4x
     # null scattering's time at 16 spp, MSE 0.74x and flicker 0.77x at equal time).
+    settles = pace is None
     later = pace is not None and bool(pace.rate) and not guided.exponent and importance is None
-    used = chosen if pace is not None else provisional_choice(chosen)
+    used = provisional_choice(chosen) if settles else chosen
     if used is not chosen:
         options = replace(options, estimator_choice=used)
     clock = _Clock(already=map_seconds + chosen_s)
@@ -235,8 +236,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 # tolerance is stricter than a run that never reaches it needs: street at 64
                 # spp's chose null scattering, whose octree took 3.5-7 s of a 9 s budget).
                 count = max(1.0, (budget - clock.now() - reserve) / (rate * width * height))
-                settled = chosen if pace is not None \
-                    else at_fewer_samples(chosen, min(count, options.max_spp))
+                settled = at_fewer_samples(chosen, min(count, options.max_spp)) if settles else chosen
                 if (settled.biased, settled.step_rate) != (used.biased, used.step_rate):
                     paused = clock.pause()
                     yield 0.1, f"guided: {settled.describe()} for the budget's {count:.0f} spp"
@@ -302,7 +302,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         samples = image.samples.astype(np.float32)
         phases["composite"] = clock.now() - began
         merged = finish_image(merged, merged_guides if options.denoise else None, options, phases)
-        if used is not options.volume_estimator():
+        if used != options.volume_estimator():      # (a fixed choice is a new object each call)
             options = replace(options, estimator_choice=used)
         stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings)
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
