@@ -56,6 +56,11 @@ def xsl(*args) -> tuple[float, subprocess.CompletedProcess]:
     return seconds, done
 
 
+def render_only_seconds(frames: list[dict]) -> float:
+    """The frames' wall time less what Cycles reported syncing."""
+    return sum(stats["wall_s"] - stats.get("cycles_sync_s", 0.0) for stats in frames)
+
+
 def scene_path() -> Path:
     return ROOT / "example_blends" / f"{SCENE}.blend"
 
@@ -179,7 +184,7 @@ def quality(out: Path, frames: str, repeats: int) -> None:
         print(f"  {name}: " + ", ".join(cells))
     for spp in EQUAL_TIME_SPP:
         guided = runs[f"guided_{spp}"]
-        render_only = sum(stats["wall_s"] - stats.get("cycles_sync_s", 0.0) for stats in guided["frames"])
+        render_only = render_only_seconds(guided["frames"])
         print(f"guided at uniform {spp}'s time ({guided['budget']:.2f} s a frame): process "
               f"{guided['seconds']:.1f} s against {render_only:.1f} s of its frames' render-only time "
               f"({guided['seconds'] / render_only:.3f}x); estimator steps chosen: "
@@ -197,7 +202,7 @@ def guided_overhead(out: Path, frames: str, repeats: int) -> None:
     budget = sum(stats["wall_s"] for stats in uniform["frames"]) / len(uniform["frames"])
     guided = median_run(repeats, lambda i: render_frames(out / "overhead" / f"guided_{i}", frames,
                                                          "--mode", "guided", "--time-budget", f"{budget:.3f}"))
-    render_only = sum(stats["wall_s"] - stats.get("cycles_sync_s", 0.0) for stats in guided["frames"])
+    render_only = render_only_seconds(guided["frames"])
     frame_wall = sum(stats["wall_s"] for stats in guided["frames"])
     n = len(guided["frames"])
     print(f"\n## guided's overhead: {SCENE}, frames {frames} (median of {repeats})")
