@@ -140,13 +140,18 @@ def test_batch_arguments_follow_the_separator(addon, foggy_animation, capfd, mon
 
 
 @pytest.mark.parametrize("mode, budget", [("uniform", ["--spp", "2"]), ("xsl", []),
+                                          ("uniform", ["--spp", "2", "--estimator", "unbiased"]),
                                           ("guided", ["--time-budget", "1.5", "--estimator", "unbiased"])])
 def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget, tmp_path):
     """One Cycles session for the frame range: balls_b's noise fog makes Cycles build its
     volume octree at every full sync (seconds); with a moving camera, frames 2 and 3 sync
-    only the camera. Cycles' own synchronization time (EXR header) says so."""
+    only the camera. Cycles' own synchronization time (EXR header) says so. With
+    ``--estimator unbiased`` the scene is set to ray march: each frame's settings are put back
+    after it, which must not make the next frame sync the octree again."""
     blender.ops.wm.open_mainfile(filepath=str(EXAMPLES / "balls_b.blend"))
     scene = blender.context.scene
+    own_estimator = "unbiased" in budget
+    scene.cycles.volume_biased = own_estimator
     camera = scene.camera
     for frame in (1, 3):
         camera.location.x += 0.1 * frame
@@ -161,6 +166,7 @@ def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget,
     images = [read_image(frame["out"]) for frame in frames]
     assert not np.array_equal(images[0], images[2])                  # the camera moved
     assert scene.render.use_persistent_data is False                 # the file's own setting
+    assert scene.cycles.volume_biased is own_estimator
     if mode == "guided":
         # The frames after the first know what a sample costs: no pilot, one render each, at
         # the count of the frame before.

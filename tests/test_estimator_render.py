@@ -168,3 +168,34 @@ def test_an_equal_time_run_counts_autos_prediction_inside_its_time(blender):
     outcome = sr.render_uniform(scene, options, seconds=2.5)
     assert outcome.stats.time_limit_s <= 2.5 - 1.5
     assert outcome.stats.phases_s["estimator"] == 1.5
+
+
+def test_the_artists_next_render_after_a_run_uses_the_artists_volume_settings(blender, tmp_path):
+    """With the artist's own persistent data on, Cycles' session outlives our run into their
+    next F12. Our run's volume settings are put back, but untagged add-on properties do not
+    reach a persistent session; ``preserved_scene`` tags the scene when the block changed them
+    (restoring other settings tags it too today, so this guards against losing both)."""
+    from xsl_render.core.imageio import read_image
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    scene.render.use_persistent_data = True
+    scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, 0.25
+    scene.cycles.samples, scene.cycles.seed, scene.cycles.use_denoising = 2, 3, False
+    scene.render.image_settings.file_format = "OPEN_EXR"
+
+    scene.render.filepath = str(tmp_path / "f12")
+
+    def artists_render():
+        # Nothing assigned in between: assigning any scene property, even its own value,
+        # tags the scene, which would hide the bug.
+        blender.ops.render.render(write_still=True, scene=scene.name)
+        return read_image(tmp_path / "f12.exr")
+
+    before = artists_render()
+    options = RenderOptions(max_spp=2, estimator="biased", step_rate=4.0).check()
+    coarse = sr.render_uniform(scene, options, spp=2).image
+    assert abs(float(coarse.mean()) - float(before.mean())) > 1e-4      # our run did march coarser
+    after = artists_render()
+    assert _volume_settings(scene) == (True, 0.25)
+    assert (after == before).all()

@@ -175,13 +175,27 @@ def preserved_scene(scene):
               for name in _DATA_COLLECTIONS}
     state = SceneState(scene)
     frame = (scene.frame_current, scene.frame_subframe)
+    key = scene.as_pointer()
+    _open_blocks[key] = _open_blocks.get(key, 0) + 1
     try:
         yield state
     finally:
         moved = (scene.frame_current, scene.frame_subframe) != frame
+        _open_blocks[key] -= 1
+        outermost = not _open_blocks[key]
+        if outermost:
+            del _open_blocks[key]
+        volumes = _volume_values(saved.get("cycles", {}))
+        touched = outermost and bool(volumes) and volumes != _volume_values(rna_values(scene.cycles))
         # Settings first: they matter most and cannot fail as a whole.
         for name, struct in structs.items():
             restore_values(struct, saved[name])
+        if touched:
+            # Cycles' volume settings are add-on properties, which do not tag the scene: with
+            # the artist's persistent data on, their next render would keep the block's. Only
+            # the outermost block tags: an inner one (a frame of a range) would make the next
+            # frame sync the whole scene again (Blender 5's octree for null scattering).
+            scene.update_tag()
         if moved:
             # Setting frame_current back does not re-evaluate the animation: the animated
             # values (fog density, lamp energy...) would keep the later frame's until the
@@ -199,6 +213,14 @@ def preserved_scene(scene):
                 if pointer not in before[name] and pointer not in state._kept \
                         and not _render_output(item):
                     collection.remove(item)
+
+
+#: preserved_scene blocks open per scene (its pointer): they nest (a range around its frames).
+_open_blocks: dict[int, int] = {}
+
+
+def _volume_values(cycles_values: dict) -> dict:
+    return {name: value for name, value in cycles_values.items() if name.startswith("volume_")}
 
 
 def _render_output(item) -> bool:
