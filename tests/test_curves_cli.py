@@ -29,6 +29,22 @@ def test_uniform_budgets(ceiling, budgets):
     assert uniform_budgets(ceiling) == budgets
 
 
+def test_a_uniform_point_above_the_ceiling_renders_at_its_own_count(blender):
+    """A biased curve's bias floor (256 spp) sits above the curves' ceiling (64): its run
+    raises the ceiling for itself instead of being refused."""
+    from xsl_render.addon.validation.contestants import contestant_request
+    from xsl_render.core.sampling.render_options import RenderOptions
+    from xsl_render.core.validation.contestants import Contestant
+
+    floor = Contestant("biased_1_256spp", "biased_1", "uniform", "marching 1 256 spp",
+                       {"spp": 256, "estimator": "biased", "step_rate": 1.0})
+    request = contestant_request(floor, RenderOptions(max_spp=64))
+    assert (request.spp, request.options.max_spp, request.options.step_rate) == (256, 256, 1.0)
+    below = contestant_request(Contestant("uniform_16spp", "uniform", "uniform", "16", {"spp": 16}),
+                               RenderOptions(max_spp=64))
+    assert (below.spp, below.options.max_spp) == (16, 64)
+
+
 def test_the_plan_at_a_ceiling_of_64():
     plan = plan_contestants(64)
     names = [c.name for c in plan]

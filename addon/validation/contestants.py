@@ -64,7 +64,10 @@ def warm_up(scene) -> None:
 
 
 def _uniform(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
-    return RenderRequest("uniform", options, spp=int(contestant.params["spp"]))
+    """Uniform sampling at the contestant's count; a count above the curves' ceiling (a
+    biased curve's bias floor at 256 spp) raises the ceiling for that run."""
+    spp = int(contestant.params["spp"])
+    return RenderRequest("uniform", replace(options, max_spp=max(options.max_spp, spp)), spp=spp)
 
 
 def _adaptive(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
