@@ -66,14 +66,15 @@ class MarchingError:
 
     ``pixels`` are flat indices into the rays' window; ``transmittance`` the true
     exp(-tau) to the first surface; ``bias`` the mean estimate minus the truth; ``spread``
-    the standard deviation of one sample's estimate; ``step_rate`` the scene rate used.
+    the standard deviation of one sample's estimate; ``step_rate`` the scene rate used (or the
+    rates per medium).
     """
 
     pixels: np.ndarray          # (n,) int64
     transmittance: np.ndarray   # (n, 3)
     bias: np.ndarray            # (n, 3)
     spread: np.ndarray          # (n, 3)
-    step_rate: float
+    step_rate: float | tuple       # the scene rate, or one per medium
 
     def luminance(self, values: np.ndarray) -> np.ndarray:
         """(n,) luminance of (n, 3) per-channel values (``scene_model.luminance``'s weights)."""
@@ -164,34 +165,37 @@ class MarchingPredictor:
         self.u = (index + 0.5) / runs
         self.v = np.mod(0.5 + index * _GOLDEN, 1.0)
         self.pieces = _ray_pieces(rays, media, segments, self.pixels)
-        # Pieces in homogeneous media only are marched in one exact step at every rate.
+        # Pieces by the media active in them; pieces in homogeneous media only are marched in
+        # one exact step at every rate.
+        by_active: dict = {}
+        for ray, a, b, active in self.pieces:
+            by_active.setdefault(active, []).append((ray, a, b))
+        self._by_active = {active: tuple(np.array(column) for column in zip(*pieces))
+                           for active, pieces in by_active.items()}
         self.tau_exact = np.zeros((len(self.pixels), 3))
         with _Evaluator(media) as evaluate:
-            for active, rows, a, b, count in self._batches(1.0):
+            for active, rows, a, b, count in self._batches(self._rates(1.0)):
                 if count == 0:
                     self._integrate(evaluate, self.tau_exact, active, rows, a, b, 1)
-        self.tau_stepped = np.zeros((len(self.pixels), 3))
-        self._truth_rate = math.inf
-        self._cache: dict[float, MarchingError] = {}
-
-    def _true_depth(self, rate: float) -> None:
-        """The stepped pieces' optical depth, ``REFERENCE_REFINE`` times finer than Cycles'
-        steps at ``rate``; integrated again only when a finer rate is asked for (the small
-        rates are asked last: they cost the most)."""
-        if rate >= self._truth_rate:
-            return
-        self.tau_stepped = np.zeros((len(self.pixels), 3))
-        with _Evaluator(self.media) as evaluate:
-            for active, rows, a, b, count in self._batches(rate):
-                if count:
-                    self._integrate(evaluate, self.tau_stepped, active, rows, a, b,
-                                    max(count * REFERENCE_REFINE, 16))
-        self._truth_rate = rate
+        # Per (active media, their step): the marched depths (rays, runs, 3) and the true
+        # ones (rays, 3) of those pieces. A rate for one medium changes only the pieces where
+        # it sets the step, so per-medium choices re-march only those.
+        self._pieces_cache: dict = {}
+        self._cache: dict = {}
 
     @property
     def heterogeneous(self) -> bool:
         """Some piece of some sampled ray is marched in steps (else every rate is exact)."""
         return any(math.isfinite(min(self.steps[m] for m in active)) for *_, active in self.pieces)
+
+    def _rates(self, rate) -> tuple[float, ...]:
+        """One scene rate for every medium, or a rate per medium (in ``media``'s order)."""
+        if isinstance(rate, (int, float)):
+            return (float(rate),) * len(self.media)
+        rates = tuple(float(r) for r in rate)
+        if len(rates) != len(self.media):
+            raise ValueError(f"{len(rates)} step rates for {len(self.media)} media")
+        return rates
 
     def _integrate(self, evaluate, tau, active, rows, a, b, samples: int) -> None:
         """Midpoint rule with ``samples`` points per piece, added into ``tau``."""
@@ -206,49 +210,74 @@ class MarchingPredictor:
                 _add(tau, r, sigma.reshape(len(r), samples, 3).mean(axis=1) * (hi - lo)[:, None])
             evaluate(active, points.reshape(-1, 3), done)
 
-    def _batches(self, rate: float):
+    def _step(self, active, rates) -> float:
+        """Cycles' step where ``active`` media overlap: the smallest of theirs (inf: homogeneous
+        media only, one exact step)."""
+        return min(self.steps[m] * rates[m] for m in active)
+
+    def _batches(self, rates, only=None):
         """(active media, rows, a, b, padded step count) of pieces marched alike; a count of
-        0 means homogeneous media only (one exact step)."""
-        groups: dict = {}
-        for ray, a, b, active in self.pieces:
-            step = min(self.steps[m] for m in active) * rate
-            count = 0
+        0 means homogeneous media only (one exact step). ``only``: those active media's."""
+        for active, (rays, a_all, b_all) in self._by_active.items():
+            if only is not None and active != only:
+                continue
+            step = self._step(active, rates)
+            counts = np.zeros(len(rays), np.int64)
             if math.isfinite(step):
-                length = b - a
-                step = max(min(step, length), length / self.max_steps)
+                length = b_all - a_all
+                steps = np.maximum(np.minimum(step, length), length / self.max_steps)
                 # Steps a piece can take (its first is a fraction u of one), rounded up to
                 # even so that the pieces fall into fewer vectorised batches.
-                count = int(math.ceil(length / step)) + 1
-                count += count % 2
-            groups.setdefault((active, count), []).append((ray, a, b))
-        for (active, count), pieces in groups.items():
-            rows, a, b = (np.array(column) for column in zip(*pieces))
-            yield active, rows.astype(np.int64), a.astype(np.float64), b.astype(np.float64), count
+                counts = np.ceil(length / steps).astype(np.int64) + 1
+                counts += counts % 2
+            for count in np.unique(counts):
+                chosen = counts == count
+                yield (active, rays[chosen].astype(np.int64), a_all[chosen].astype(np.float64),
+                       b_all[chosen].astype(np.float64), int(count))
 
-    def error(self, rate: float) -> MarchingError:
-        """The marching's bias and one-sample spread in exp(-tau) at scene step ``rate``."""
-        rate = float(rate)
-        if rate not in self._cache:
-            self._true_depth(rate)
+    def _stepped_pieces(self, active, rates):
+        """The marched (rays, runs, 3) and true (rays, 3) optical depth of the pieces where
+        ``active`` media are, at ``rates`` (cached per step: where media overlap the finest
+        step wins, so a coarser rate for another of them changes nothing here)."""
+        key = (active, self._step(active, rates))
+        if key not in self._pieces_cache:
             runs = len(self.u)
-            tau_runs = np.repeat(self.tau_exact[:, None, :], runs, axis=1)
+            marched = np.zeros((len(self.pixels), runs, 3))
+            true = np.zeros((len(self.pixels), 3))
             with _Evaluator(self.media) as evaluate:
-                for active, rows, a, b, count in self._batches(rate):
+                for _, rows, a, b, count in self._batches(rates, only=active):
                     if count == 0:
                         continue
-                    step = min(self.steps[m] for m in active) * rate
-                    step = np.maximum(np.minimum(step, b - a), (b - a) / self.max_steps)
+                    # The truth: a midpoint integral REFERENCE_REFINE times finer than the steps.
+                    self._integrate(evaluate, true, active, rows, a, b, max(count * REFERENCE_REFINE, 16))
+                    step = np.maximum(np.minimum(self._step(active, rates), b - a), (b - a) / self.max_steps)
                     per_chunk = max(1, _CHUNK_POINTS // (runs * count))
                     for first in range(0, len(rows), per_chunk):
                         part = slice(first, first + per_chunk)
-                        self._march(evaluate, tau_runs, active, rows[part], a[part], b[part],
+                        self._march(evaluate, marched, active, rows[part], a[part], b[part],
                                     step[part], count)
-            truth = np.exp(-(self.tau_exact + self.tau_stepped))
+            self._pieces_cache[key] = (marched, true)
+        return self._pieces_cache[key]
+
+    def error(self, rate) -> MarchingError:
+        """The marching's bias and one-sample spread in exp(-tau) at scene step ``rate``, or
+        at one rate per medium (a sequence in ``media``'s order: a material's own rate)."""
+        rates = self._rates(rate)
+        if rates not in self._cache:
+            runs = len(self.u)
+            tau_runs = np.repeat(self.tau_exact[:, None, :], runs, axis=1)
+            tau_true = self.tau_exact.copy()
+            for active in self._by_active:
+                if math.isfinite(self._step(active, rates)):
+                    marched, true = self._stepped_pieces(active, rates)
+                    tau_runs += marched
+                    tau_true += true
+            truth = np.exp(-tau_true)
             estimates = np.exp(-tau_runs)
-            self._cache[rate] = MarchingError(
+            self._cache[rates] = MarchingError(
                 pixels=self.pixels, transmittance=truth, bias=estimates.mean(axis=1) - truth,
-                spread=estimates.std(axis=1), step_rate=rate)
-        return self._cache[rate]
+                spread=estimates.std(axis=1), step_rate=rate if isinstance(rate, (int, float)) else rates)
+        return self._cache[rates]
 
     def _march(self, evaluate, tau_runs, active, rows, a, b, step, count) -> None:
         """Cycles' stepping over pieces: their optical depth per offset pair added into
