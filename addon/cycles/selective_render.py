@@ -71,12 +71,21 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
 
 
 def apply_estimator(scene, choice) -> None:
-    """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``)."""
+    """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
+    materials' and the world's own steps too where auto gave some media coarser ones."""
+    import bpy
+
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)
     if choice.biased and choice.step_rate is not None:
         scene.cycles.volume_step_rate = float(choice.step_rate)
+    for key, value in (choice.medium_settings or {}).items():
+        kind, name = key.split(":", 1)
+        if kind == "world":
+            bpy.data.worlds[name].cycles.volume_step_size = float(value)
+        else:
+            bpy.data.materials[name].cycles.volume_step_rate = float(value)
 
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,

@@ -60,8 +60,32 @@ def forget_synced_volumes() -> None:
 
 
 def _volume_settings(scene) -> tuple:
+    """The scene's estimator and step rate, the world's step size and the materials' own
+    step rates (``--estimator auto`` may give some media coarser steps)."""
     cycles = scene.cycles
-    return bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6)
+    world = getattr(scene.world, "cycles", None)
+    materials = {slot.material for ob in scene.objects for slot in ob.material_slots
+                 if slot.material is not None and hasattr(slot.material, "cycles")}
+    return (bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6),
+            None if world is None else round(float(world.volume_step_size), 6),
+            tuple(sorted((m.name, round(float(m.cycles.volume_step_rate), 6)) for m in materials)))
+
+
+def _tag_volume_changes(scene) -> bool:
+    """Whether the volume settings differ from what Cycles last synced for the scene; the
+    materials and the world whose own step changed are tagged here (a scene tag alone does
+    not make Cycles read a material's step rate again), the scene by the caller."""
+    import bpy
+
+    synced, now = _synced_volumes.get(scene.as_pointer()), _volume_settings(scene)
+    if synced == now:
+        return False
+    # Nothing known (a run's first render): Cycles may hold any steps, tag them all.
+    if (synced is None or synced[2] != now[2]) and scene.world is not None:
+        scene.world.update_tag()
+    for name, rate in set(now[3]) - set(() if synced is None else synced[3]):
+        bpy.data.materials[name].update_tag()
+    return True
 
 
 @dataclass
@@ -214,7 +238,7 @@ class CyclesWindowRenderer:
                    # A new sample count resets Cycles' session, which re-reads the time limit;
                    # only a new limit at the same count needs the (costly) re-sync.
                    new_limit and not new_count,
-                   _synced_volumes.get(scene.as_pointer()) != _volume_settings(scene)]
+                   _tag_volume_changes(scene)]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).

@@ -13,10 +13,11 @@ import time
 from dataclasses import replace
 
 from ...core.maps.transmittance import medium_segments
-from ...core.media.ray_marching import MarchingPredictor, sample_pixels
+from ...core.media.ray_marching import MarchingPredictor, medium_step, sample_pixels
 from ...core.sampling.render_options import RenderOptions
-from ...core.sampling.volume_estimator import (EstimatorChoice, choose_step_rate, fixed_choice,
-                                               kept_null_scattering, visible_bias)
+from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
+                                               fixed_choice, kept_null_scattering, per_medium_rates,
+                                               visible_bias)
 from ..scene.geometry import scan_scene
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
@@ -73,12 +74,62 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
                                  reason="homogeneous media only: ray marching takes each in one "
                                         "exact step")
     else:
-        def measure(rate: float) -> float:
+        def measure(rate) -> float:
             error = predictor.error(rate)
             return visible_bias(error.luminance(error.transmittance), error.luminance(error.bias))
 
         choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
+        choice = _per_medium(scene, choice, media, measure, options.step_rate, previous)
     return replace(choice, seconds=time.perf_counter() - started)
+
+
+def step_carriers(media) -> dict:
+    """What carries each heterogeneous medium's step in Blender -> its media's indices:
+    "material:<name>" (``volume_step_rate``, shared by the material's users) or
+    "world:<name>" (``volume_step_size``). Homogeneous media take one exact step."""
+    groups: dict = {}
+    for index, medium in enumerate(media):
+        if not math.isfinite(medium_step(medium)):
+            continue
+        if medium.kind == "world":
+            groups.setdefault(f"world:{medium.name}", []).append(index)
+        elif medium.material is not None:
+            groups.setdefault(f"material:{medium.material}", []).append(index)
+    return {key: tuple(members) for key, members in groups.items()}
+
+
+def _per_medium(scene, choice: EstimatorChoice, media, measure, largest, previous) -> EstimatorChoice:
+    """``per_medium_rates`` for a still or a range's first frame; a later frame keeps the
+    frame before's media rates while its scene rate is the same and they still pass (no
+    search: a step that switched from frame to frame would flicker), else none."""
+    groups = step_carriers(media)
+    if previous is not None:
+        if not (previous.medium_rates and choice.biased and choice.step_rate == previous.step_rate):
+            return choice
+        rates = [choice.step_rate] * len(media)
+        for key, rate in previous.medium_rates.items():
+            for m in groups.get(key, ()):
+                rates[m] = rate
+        value = measure(tuple(rates))
+        if value > max(choice.tolerance, choice.predicted_bias):
+            return choice
+        return replace(choice, medium_rates=previous.medium_rates, medium_settings=previous.medium_settings,
+                       predicted_bias=value)
+    chosen = per_medium_rates(choice, measure, groups, len(media), CANDIDATE_RATES, largest)
+    if not chosen.medium_rates:
+        return chosen
+    return replace(chosen, medium_settings={key: _carried_step(scene, key) * rate / chosen.step_rate
+                                            for key, rate in chosen.medium_rates.items()})
+
+
+def _carried_step(scene, key: str) -> float:
+    """The material's ``volume_step_rate`` or the world's ``volume_step_size`` now."""
+    import bpy
+
+    kind, name = key.split(":", 1)
+    if kind == "world":
+        return float(bpy.data.worlds[name].cycles.volume_step_size)
+    return float(bpy.data.materials[name].cycles.volume_step_rate)
 
 
 def with_estimator_choice(scene, options: RenderOptions, spp: float,

@@ -117,6 +117,14 @@ def _structs(scene) -> dict:
             structs[f"view_layer_cycles:{layer.name}"] = layer.cycles
     if scene.world is not None and hasattr(scene.world, "cycles_visibility"):
         structs["world_visibility"] = scene.world.cycles_visibility
+    if scene.world is not None and hasattr(scene.world, "cycles"):
+        structs["world_cycles"] = scene.world.cycles           # the world volume's step size
+    # The materials' own Cycles settings (a volume's step rate: --estimator auto may set it).
+    materials = {slot.material for ob in scene.objects for slot in ob.material_slots
+                 if slot.material is not None}
+    for material in sorted(materials, key=lambda m: m.name):
+        if hasattr(material, "cycles"):
+            structs[f"material_cycles:{material.name}"] = material.cycles
     return structs
 
 
@@ -185,8 +193,7 @@ def preserved_scene(scene):
         outermost = not _open_blocks[key]
         if outermost:
             del _open_blocks[key]
-        volumes = _volume_values(saved.get("cycles", {}))
-        touched = outermost and bool(volumes) and volumes != _volume_values(rna_values(scene.cycles))
+        touched = _volume_changes(structs, saved) if outermost else set()
         # Settings first: they matter most and cannot fail as a whole.
         for name, struct in structs.items():
             restore_values(struct, saved[name])
@@ -194,8 +201,11 @@ def preserved_scene(scene):
             # Cycles' volume settings are add-on properties, which do not tag the scene: with
             # the artist's persistent data on, their next render would keep the block's. Only
             # the outermost block tags: an inner one (a frame of a range) would make the next
-            # frame sync the whole scene again (Blender 5's octree for null scattering).
+            # frame sync the whole scene again (Blender 5's octree for null scattering). A
+            # material's or the world's own step needs its own tag.
             scene.update_tag()
+            for name in touched - {"cycles"}:
+                structs[name].id_data.update_tag()
         if moved:
             # Setting frame_current back does not re-evaluate the animation: the animated
             # values (fog density, lamp energy...) would keep the later frame's until the
@@ -219,8 +229,13 @@ def preserved_scene(scene):
 _open_blocks: dict[int, int] = {}
 
 
-def _volume_values(cycles_values: dict) -> dict:
-    return {name: value for name, value in cycles_values.items() if name.startswith("volume_")}
+def _volume_changes(structs: dict, saved: dict) -> set[str]:
+    """The ``_structs`` names whose volume settings (``volume_*`` of Cycles, the world and
+    the materials) differ from the ``saved`` values."""
+    return {name for name, struct in structs.items()
+            if (name in ("cycles", "world_cycles") or name.startswith("material_cycles:"))
+            and any(value != saved[name].get(prop) for prop, value in rna_values(struct).items()
+                    if prop.startswith("volume_"))}
 
 
 def _render_output(item) -> bool:

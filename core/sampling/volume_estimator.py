@@ -113,6 +113,13 @@ class EstimatorChoice:
     tried: dict | None = None
     reason: str = ""
     seconds: float = 0.0
+    #: Coarser steps for some media (``per_medium_rates``): what carries a medium's step in
+    #: Blender ("material:<name>", "world:<name>") -> its rate in scene-rate terms (the
+    #: medium marches as if the scene rate were this); ``medium_settings``: the same keys ->
+    #: the value the material's ``volume_step_rate`` (the world's ``volume_step_size``) is
+    #: given for it, next to the scene rate ``step_rate``.
+    medium_rates: dict | None = None
+    medium_settings: dict | None = None
 
     def to_dict(self) -> dict:
         data = asdict(self)
@@ -126,7 +133,9 @@ class EstimatorChoice:
         if not self.biased:
             return "null scattering (unbiased)"
         rate = "the scene's step rate" if self.step_rate is None else f"step rate {self.step_rate:g}"
-        return f"ray marching at {rate}"
+        coarser = "".join(f", {key.split(':', 1)[1]} at {value:g}"
+                          for key, value in (self.medium_rates or {}).items())
+        return f"ray marching at {rate}{coarser}"
 
 
 def fixed_choice(estimator: str, step_rate: float | None) -> EstimatorChoice:
@@ -185,6 +194,47 @@ def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
     return _marching(rate, tried, tolerance, spp, kept)
 
 
+def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: int,
+                     rates=CANDIDATE_RATES, largest: float | None = None) -> EstimatorChoice:
+    """Auto's ray-marching ``choice`` with coarser steps for the media whose bias allows them
+    (Cycles takes a material's ``volume_step_rate`` and the world's ``volume_step_size`` on
+    top of the scene rate).
+
+    ``groups``: what carries a step in Blender ("material:<name>", "world:<name>") -> the
+    indices of its heterogeneous media among ``count`` media (a material's users share its
+    rate). ``measure_at(rates)``: the visible-bias measure with one scene-equivalent rate per
+    medium. Each group in turn takes the coarsest candidate above the scene rate (up to
+    ``largest``) that keeps the measure within the choice's limit, the others as chosen so
+    far: the tolerance, or the choice's own measure when it was taken within the null
+    scattering margin (a coarser medium may not make that worse). The candidates are tried
+    coarsest first (the bias grows with the step, so the first that passes is the one; the
+    coarse ones cost least to predict). With one group the scene rate is that group's
+    already: the choice is returned unchanged, without predicting.
+    """
+    if choice.estimator != "auto" or not choice.biased or choice.step_rate is None \
+            or choice.tolerance is None or choice.predicted_bias is None or len(groups) < 2:
+        return choice
+    limit = max(choice.tolerance, choice.predicted_bias)
+    base = choice.step_rate
+    coarser = sorted((r for r in rates if r > base and (largest is None or r <= largest)), reverse=True)
+    current = [base] * count
+    kept, measure = {}, choice.predicted_bias
+    for name, members in groups.items():
+        for rate in coarser:
+            trial = list(current)
+            for m in members:
+                trial[m] = rate
+            value = measure_at(tuple(trial))
+            if value <= limit:
+                current, measure, kept[name] = trial, value, rate
+                break
+    if not kept:
+        return choice
+    return replace(choice, medium_rates=kept, predicted_bias=measure,
+                   reason=f"{choice.reason}; {', '.join(key.split(':', 1)[1] for key in kept)} "
+                          f"coarser, within {limit:.2%} still ({measure:.2%})")
+
+
 def kept_null_scattering(previous: EstimatorChoice | None, spp: float) -> EstimatorChoice | None:
     """A frame range that chose null scattering keeps it, without predicting again (None: no
     such frame before, predict as usual).
@@ -239,6 +289,16 @@ def at_fewer_samples(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
     spp = min(float(spp), chosen_spp(choice))
     tried = dict(choice.tried)
     again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
+    if choice.medium_rates and again.biased and again.step_rate == choice.step_rate:
+        # The same scene rate: the media's own coarser steps were measured with it.
+        again = replace(again, medium_rates=choice.medium_rates, medium_settings=choice.medium_settings,
+                        predicted_bias=choice.predicted_bias)
+    elif choice.medium_rates and choice.medium_settings:
+        # They were not measured with the new rate: the materials' and world's own values
+        # again (a run that rendered its pilot with the coarser steps has them set).
+        again = replace(again, medium_settings={
+            key: value * choice.step_rate / choice.medium_rates[key]
+            for key, value in choice.medium_settings.items()})
     return replace(again, tried=tried, seconds=choice.seconds)
 
 
