@@ -42,6 +42,7 @@ import numpy as np
 from ...core.camera import border_for_window
 from ...core.errors import InputError
 from ..scene.probe import render_size
+from ..scene.shader_export import has_volume
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -59,25 +60,31 @@ def forget_synced_volumes() -> None:
     _synced_volumes.clear()
 
 
-def _volume_settings(scene) -> tuple:
-    """The scene's estimator and step rate, the world's step size and the materials' own
-    step rates (``--estimator auto`` may give some media coarser steps)."""
+def volume_materials(scene) -> list:
+    """The materials of the scene's objects that have a volume (whose step rate matters)."""
+    found = {slot.material for ob in scene.objects for slot in ob.material_slots
+             if slot.material is not None and hasattr(slot.material, "cycles")
+             and slot.material.node_tree is not None and has_volume(slot.material.node_tree)}
+    return sorted(found, key=lambda material: material.name)
+
+
+def _volume_settings(scene, materials) -> tuple:
+    """The scene's estimator and step rate, the world's step size and the volume
+    ``materials``' own step rates (``--estimator auto`` may give some media coarser steps)."""
     cycles = scene.cycles
     world = getattr(scene.world, "cycles", None)
-    materials = {slot.material for ob in scene.objects for slot in ob.material_slots
-                 if slot.material is not None and hasattr(slot.material, "cycles")}
     return (bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6),
             None if world is None else round(float(world.volume_step_size), 6),
-            tuple(sorted((m.name, round(float(m.cycles.volume_step_rate), 6)) for m in materials)))
+            tuple((m.name, round(float(m.cycles.volume_step_rate), 6)) for m in materials))
 
 
-def _tag_volume_changes(scene) -> bool:
+def _tag_volume_changes(scene, materials) -> bool:
     """Whether the volume settings differ from what Cycles last synced for the scene; the
     materials and the world whose own step changed are tagged here (a scene tag alone does
     not make Cycles read a material's step rate again), the scene by the caller."""
     import bpy
 
-    synced, now = _synced_volumes.get(scene.as_pointer()), _volume_settings(scene)
+    synced, now = _synced_volumes.get(scene.as_pointer()), _volume_settings(scene, materials)
     if synced == now:
         return False
     # Nothing known (a run's first render): Cycles may hold any steps, tag them all.
@@ -149,6 +156,8 @@ class CyclesWindowRenderer:
         render.use_stamp = False
         render.use_file_extension = True
         self.guides = guides
+        # Looked up once: a render's check of the volume settings reads only these.
+        self.volume_materials = volume_materials(scene)
         self.layer.cycles.denoising_store_passes = guides
         self.folder = Path(tempfile.mkdtemp(prefix="xsl-tiles-"))
         render.filepath = str(self.folder / "window")
@@ -238,7 +247,7 @@ class CyclesWindowRenderer:
                    # A new sample count resets Cycles' session, which re-reads the time limit;
                    # only a new limit at the same count needs the (costly) re-sync.
                    new_limit and not new_count,
-                   _tag_volume_changes(scene)]
+                   _tag_volume_changes(scene, self.volume_materials)]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).
@@ -265,7 +274,7 @@ class CyclesWindowRenderer:
         if listen:
             bpy.app.handlers.render_stats.append(self._handler)
         started = time.perf_counter()
-        _synced_volumes[scene.as_pointer()] = _volume_settings(scene)
+        _synced_volumes[scene.as_pointer()] = _volume_settings(scene, self.volume_materials)
         try:
             result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
         except BaseException:
