@@ -229,3 +229,27 @@ def test_the_artists_next_render_has_the_materials_own_steps_again(blender, tmp_
             renderer.render(None, 2)
     assert smoke.cycles.volume_step_rate == 1.0
     np.testing.assert_array_equal(artists_render(), before)
+
+
+@pytest.mark.blender
+def test_a_later_frame_keeps_the_frame_befores_media_steps_while_they_pass(blender):
+    """A range's later frame does not search again (a step switching from frame to frame
+    would flicker): it keeps the frame before's media steps when its scene rate is the same
+    and they still pass, else it has none."""
+    from dataclasses import replace
+
+    from xsl_render.addon.maps.estimator_choice import choose_estimator
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    options = RenderOptions(max_spp=16, estimator="auto")
+    first = choose_estimator(scene, options, 16)
+    assert first.medium_rates == {"material:smoke": 4.0} and first.step_rate == 0.5
+    later = choose_estimator(scene, options, 16, previous=first)
+    assert later.step_rate == 0.5
+    assert later.medium_rates == first.medium_rates and later.medium_settings == first.medium_settings
+    # Steps the new frame's prediction no longer passes: none kept.
+    coarse = replace(first, medium_rates={"material:smoke": 4.0, "material:noise fog": 4.0},
+                     medium_settings={"material:smoke": 8.0, "material:noise fog": 8.0})
+    assert choose_estimator(scene, options, 16, previous=coarse).medium_rates is None
