@@ -77,6 +77,13 @@ def _best_fixed(data: dict) -> list[tuple[str, float, dict]]:
             if run["curve"].startswith("biased_") and not name.endswith(f"_{FLOOR_SPP}spp")]
 
 
+def speedup_cell(speedups: dict, metric: str) -> str:
+    """A fixed-width table cell: the speedup on ``metric``, '*' when read beyond the curve."""
+    entry = speedups.get(metric) or {}
+    value = entry.get("value")
+    return "   -  " if value is None else f"{value:5.2f}{'*' if entry.get('extrapolated') else ' '}"
+
+
 def report_scene(scene: str, data: dict) -> list[str]:
     from xsl_render.core.validation.curves import speedups_against
 
@@ -101,18 +108,13 @@ def report_scene(scene: str, data: dict) -> list[str]:
         over_auto = ({} if run["curve"] == "auto" else
                      speedups_against(auto, (name, run["seconds"], run), metrics).get("auto", {}))
 
-        def fmt(speedups, metric):
-            entry = speedups.get(metric) or {}
-            value = entry.get("value")
-            return "   -  " if value is None else f"{value:5.2f}{'*' if entry.get('extrapolated') else ' '}"
-
         lines.append(f"{run['label'][:28]:28s} {run['seconds']:6.2f} {run['flip'] or 0:7.4f} "
                      f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} "
                      f"{run['mse'] or 0:9.2e} {rate:>10s} | "
-                     + " ".join(fmt(over, m) for m in METRICS) + " | "
-                     + " ".join(fmt(against, m) for m in METRICS) + " | "
-                     + " ".join(fmt(over_auto, m) for m in METRICS)
-                     + (f" | {run.get('jod') or 0:6.3f} {fmt(over, 'jod')} {fmt(over_auto, 'jod')}"
+                     + " ".join(speedup_cell(over, m) for m in METRICS) + " | "
+                     + " ".join(speedup_cell(against, m) for m in METRICS) + " | "
+                     + " ".join(speedup_cell(over_auto, m) for m in METRICS)
+                     + (f" | {run.get('jod') or 0:6.3f} {speedup_cell(over, 'jod')} {speedup_cell(over_auto, 'jod')}"
                         if "jod" in metrics else ""))
     lines.append("speedup = time the curve needs for the run's error / the run's time; "
                  "* extrapolated beyond the curve's measured range")

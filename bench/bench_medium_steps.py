@@ -64,6 +64,7 @@ def _points(data: dict, curve: str) -> list:
 
 
 def report(data: dict, one_rate: dict) -> list[str]:
+    from bench_estimator import speedup_cell
     from xsl_render.core.validation.curves import speedups_against
 
     baselines = {"uniform": _points(data, "uniform"), "one_rate": _points(one_rate, "auto_one_rate")}
@@ -84,9 +85,7 @@ def report(data: dict, one_rate: dict) -> list[str]:
             over = speedups_against(baselines, (name, seconds, run), METRICS, own_curve=None)
 
             def fmt(baseline, metric):
-                entry = (over.get(baseline) or {}).get(metric) or {}
-                value = entry.get("value")
-                return "   -  " if value is None else f"{value:5.2f}{'*' if entry.get('extrapolated') else ' '}"
+                return speedup_cell(over.get(baseline) or {}, metric)
             own = {"uniform": "uniform", "auto_one_rate": "one_rate"}.get(run["curve"])
             lines.append(f"{run['label'][:30]:30s} {seconds:6.2f} {run['flip'] or 0:7.4f} "
                          f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} "
