@@ -438,10 +438,10 @@ def test_guided_animation_shares_its_time_between_frames(blender, budget_fog, tm
     left = 2 * budget - done[0].stats.sequence_budget["spent"]
     assert done[1].stats.time_budget_s == pytest.approx(max(0.5 * budget, left), rel=1e-9)
     total = sum(entry.stats.wall_s for entry in done)
-    # Within 15 % (the estimator issue's bound for a budget): a later frame's count comes
+    # At least 85 % (the estimator issue's bound for a budget): a later frame's count comes
     # from the frame before's cost per sample, and on 2-s frames its error is a few tenths of
     # a second (0.9x failed 1 run in 8, before and after the per-medium steps alike).
-    assert 0.85 * 2 * budget <= total <= 1.15 * 2 * budget, done
+    assert 0.85 * 2 * budget <= total <= 1.1 * 2 * budget, done
     for entry in done:
         assert oiio.ImageBuf(entry.path).spec().getattribute("xsl_render:mode") == "guided"
     assert job.finish(done).report.startswith("Guided render: 2 frame(s) 1..2")
