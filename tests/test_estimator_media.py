@@ -18,7 +18,8 @@ from test_ray_marching import _Field, _two_media_scene
 from xsl_render.core.maps.camera_rays import CameraRays, MediumIntervals
 from xsl_render.core.media.ray_marching import MarchingPredictor
 from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, at_fewer_samples,
-                                                       per_medium_rates, tolerated_bias)
+                                                       choose_step_rate, per_medium_rates,
+                                                       tolerated_bias)
 
 W, H = 48, 27
 
@@ -63,6 +64,10 @@ def _chosen(rate=0.5, measure=0.008, spp=16) -> EstimatorChoice:
                            tolerance=tolerated_bias(spp), tried={rate: measure}, reason="r")
 
 
+#: The materials' and world's own step values.
+OWN = {"material:fog": 1.0, "material:smoke": 1.5, "world:World": 0.2}
+
+
 def _measure_of(allowed: dict):
     """A measure that passes while each medium's rate is at most ``allowed[m]`` (else 1)."""
     calls = []
@@ -81,7 +86,7 @@ def _measure_of(allowed: dict):
 def test_each_medium_takes_the_coarsest_rate_its_bias_allows(allowed, expected):
     measure, calls = _measure_of(allowed)
     groups = {"material:fog": (0,), "material:smoke": (1,), "world:World": (2,)}
-    chosen = per_medium_rates(_chosen(), measure, groups, 3)
+    chosen = per_medium_rates(_chosen(), measure, groups, 3, OWN)
     assert chosen.medium_rates == expected
     assert chosen.step_rate == 0.5 and chosen.biased
     assert all(rates[m] >= 0.5 for rates in calls for m in range(3))       # never finer
@@ -92,14 +97,14 @@ def test_each_medium_takes_the_coarsest_rate_its_bias_allows(allowed, expected):
 
 def test_no_medium_coarser_than_a_given_step_rate_nor_than_the_limit():
     measure, calls = _measure_of({0: 0.5, 1: 4.0})
-    capped = per_medium_rates(_chosen(), measure, {"material:fog": (0,), "material:smoke": (1,)}, 2,
+    capped = per_medium_rates(_chosen(), measure, {"material:fog": (0,), "material:smoke": (1,)}, 2, OWN,
                               largest=2.0)
     assert capped.medium_rates == {"material:smoke": 2.0}
     # Chosen within the null-scattering margin (measure above the tolerance): the limit is
     # its own measure, not the tolerance.
     over = _chosen(measure=0.02)
     assert per_medium_rates(over, lambda rates: 0.015 if rates[1] <= 1 and rates[0] <= 0.5 else 0.03,
-                            {"material:fog": (0,), "material:smoke": (1,)}, 2).medium_rates \
+                            {"material:fog": (0,), "material:smoke": (1,)}, 2, OWN).medium_rates \
         == {"material:smoke": 1.0}
 
 
@@ -113,23 +118,31 @@ def test_nothing_is_predicted_where_no_medium_could_take_its_own_step(choice):
         raise AssertionError("predicted")
     groups = {"material:fog": (0,)} if choice.estimator == "auto" and choice.biased else \
         {"material:fog": (0,), "material:smoke": (1,)}
-    assert per_medium_rates(choice, never, groups, 2) == choice
+    assert per_medium_rates(choice, never, groups, 2, OWN) == choice
 
 
-def test_a_settled_count_keeps_the_media_rates_only_with_the_same_scene_rate():
-    chosen = EstimatorChoice("auto", biased=True, step_rate=0.5, predicted_bias=0.009,
-                             tolerance=tolerated_bias(64), tried={1.0: 0.04, 0.5: 0.008},
-                             medium_rates={"material:smoke": 4.0},
-                             medium_settings={"material:smoke": 8.0 * 1.5})
-    # Fewer samples, same scene rate (1.0 still fails at 16 spp): kept.
-    kept = at_fewer_samples(chosen, 16)
-    assert kept.step_rate == 0.5 and kept.medium_rates == chosen.medium_rates
-    assert kept.medium_settings == chosen.medium_settings
-    # Rate 1 passes at 1 spp: the media rates were not measured with it, and the material
-    # gets its own value back (1.5, the artist's), not the pilot's coarser one.
+def test_a_settled_count_chooses_the_media_steps_again_from_the_ceilings_trials():
+    """Guided learns its count after its pilot: with the same scene rate the media steps are
+    chosen again for the larger tolerance from the trials made for the ceiling (no new
+    prediction); with another scene rate the materials get their own values back."""
+    tried = {4.0: 0.16, 2.0: 0.11, 1.0: 0.04, 0.5: 0.008}
+    ceiling = choose_step_rate(tried.__getitem__, 64, rates=tuple(tried))   # 0.5: 0.8 % within 2x 0.63 %
+    # The limit is then 0.8 %: the smoke at 4 is just over it, at 2 within it.
+    measures = {(0.5, 4.0): 0.0095, (0.5, 2.0): 0.0079, (4.0, 0.5): 0.5, (2.0, 0.5): 0.3, (1.0, 0.5): 0.05}
+    groups = {"material:fog": (0,), "material:smoke": (1,)}
+    chosen = per_medium_rates(ceiling, measures.__getitem__, groups, 2, OWN)
+    assert chosen.step_rate == 0.5 and chosen.medium_rates == {"material:smoke": 2.0}
+    assert chosen.medium_settings == {"material:smoke": pytest.approx(1.5 * 2.0 / 0.5)}
+    assert chosen.to_dict()["media"]["tried"][0] == [[4.0, 0.5], 0.5]             # JSON-ready
+    settled = at_fewer_samples(chosen, 16)                            # tolerance 1.25 %
+    assert settled.step_rate == 0.5 and settled.medium_rates == {"material:smoke": 4.0}
+    assert settled.medium_settings == {"material:smoke": pytest.approx(1.5 * 4.0 / 0.5)}
+    assert settled.predicted_bias == 0.0095
+    # Rate 1 passes at 1 spp: the media steps were not measured with it, and the smoke's
+    # material gets its own value back (the pilot may have set the coarser one).
     moved = at_fewer_samples(chosen, 1)
     assert moved.step_rate == 1.0 and moved.medium_rates is None
-    assert moved.medium_settings == {"material:smoke": pytest.approx(1.5)}
+    assert moved.medium_settings == {"material:fog": 1.0, "material:smoke": 1.5}
 
 
 # -- in Blender ----------------------------------------------------------------------------
@@ -253,3 +266,39 @@ def test_a_later_frame_keeps_the_frame_befores_media_steps_while_they_pass(blend
     coarse = replace(first, medium_rates={"material:smoke": 4.0, "material:noise fog": 4.0},
                      medium_settings={"material:smoke": 8.0, "material:noise fog": 8.0})
     assert choose_estimator(scene, options, 16, previous=coarse).medium_rates is None
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_guided_renders_the_media_steps_it_settles_on(blender, monkeypatch):
+    """A settled choice with the same scene rate but other media steps (the smoke coarser
+    for the budget's count) is what Cycles renders the final pass with, not the pilot's;
+    the material's own value comes back afterwards."""
+    from dataclasses import replace
+
+    from xsl_render.addon.cycles import guided_render
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+    from xsl_render.addon.maps.estimator_choice import with_estimator_choice
+    from xsl_render.core.sampling.guided_plan import GuidedOptions
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    smoke = blender.data.materials["smoke"]
+    options = with_estimator_choice(scene, RenderOptions(max_spp=16, estimator="auto").check(), 16)
+    chosen = options.estimator_choice
+    assert chosen.medium_settings == {"material:smoke": 8.0}
+    settled = replace(chosen, medium_rates={"material:smoke": 1.0}, medium_settings={"material:smoke": 2.0})
+    seen = []
+    real_render = CyclesWindowRenderer.render
+
+    def spying(self, *args, **kwargs):
+        seen.append(smoke.cycles.volume_step_rate)
+        return real_render(self, *args, **kwargs)
+
+    monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
+    monkeypatch.setattr(guided_render, "at_fewer_samples", lambda choice, spp: settled)
+    outcome = guided_render.render_guided(scene, options, GuidedOptions(time_budget=2.0))
+    assert seen[0] == 8.0 and seen[-1] == 2.0
+    assert outcome.stats.estimator["medium_settings"] == {"material:smoke": 2.0}
+    assert smoke.cycles.volume_step_rate == 1.0

@@ -237,7 +237,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 # spp's chose null scattering, whose octree took 3.5-7 s of a 9 s budget).
                 count = max(1.0, (budget - clock.now() - reserve) / (rate * width * height))
                 settled = at_fewer_samples(chosen, min(count, options.max_spp)) if settles else chosen
-                if (settled.biased, settled.step_rate) != (used.biased, used.step_rate):
+                if (settled.biased, settled.step_rate, settled.medium_settings) \
+                        != (used.biased, used.step_rate, used.medium_settings):
                     paused = clock.pause()
                     yield 0.1, f"guided: {settled.describe()} for the budget's {count:.0f} spp"
                     clock.resume(paused)

@@ -115,14 +115,11 @@ def _per_medium(scene, choice: EstimatorChoice, media, measure, largest, previou
             return choice
         return replace(choice, medium_rates=previous.medium_rates, medium_settings=previous.medium_settings,
                        predicted_bias=value)
-    chosen = per_medium_rates(choice, measure, groups, len(media), CANDIDATE_RATES, largest)
-    if not chosen.medium_rates:
-        return chosen
-    return replace(chosen, medium_settings={key: _carried_step(scene, key) * rate / chosen.step_rate
-                                            for key, rate in chosen.medium_rates.items()})
+    own = {key: _carried_step(key) for key in groups}
+    return per_medium_rates(choice, measure, groups, len(media), own, CANDIDATE_RATES, largest)
 
 
-def _carried_step(scene, key: str) -> float:
+def _carried_step(key: str) -> float:
     """The material's ``volume_step_rate`` or the world's ``volume_step_size`` now."""
     import bpy
 

@@ -120,6 +120,10 @@ class EstimatorChoice:
     #: given for it, next to the scene rate ``step_rate``.
     medium_rates: dict | None = None
     medium_settings: dict | None = None
+    #: What ``per_medium_rates`` worked with, so that ``at_fewer_samples`` can choose again
+    #: without predicting: {"groups": {key: [media]}, "count": media, "own": {key: the
+    #: material's or world's own value}, "largest": rate cap, "tried": [[rates, measure]...]}.
+    media: dict | None = None
 
     def to_dict(self) -> dict:
         data = asdict(self)
@@ -194,7 +198,7 @@ def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
     return _marching(rate, tried, tolerance, spp, kept)
 
 
-def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: int,
+def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: int, own: dict,
                      rates=CANDIDATE_RATES, largest: float | None = None) -> EstimatorChoice:
     """Auto's ray-marching ``choice`` with coarser steps for the media whose bias allows them
     (Cycles takes a material's ``volume_step_rate`` and the world's ``volume_step_size`` on
@@ -210,6 +214,10 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
     coarsest first (the bias grows with the step, so the first that passes is the one; the
     coarse ones cost least to predict). With one group the scene rate is that group's
     already: the choice is returned unchanged, without predicting.
+
+    ``own``: each key's value now (the material's ``volume_step_rate``, the world's
+    ``volume_step_size``); ``medium_settings`` is it times the medium's rate over the scene
+    rate. The trials are kept in ``media`` (``at_fewer_samples``).
     """
     if choice.estimator != "auto" or not choice.biased or choice.step_rate is None \
             or choice.tolerance is None or choice.predicted_bias is None or len(groups) < 2:
@@ -218,19 +226,23 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
     base = choice.step_rate
     coarser = sorted((r for r in rates if r > base and (largest is None or r <= largest)), reverse=True)
     current = [base] * count
-    kept, measure = {}, choice.predicted_bias
+    kept, measure, tried = {}, choice.predicted_bias, []
     for name, members in groups.items():
         for rate in coarser:
             trial = list(current)
             for m in members:
                 trial[m] = rate
             value = measure_at(tuple(trial))
+            tried.append([trial, value])
             if value <= limit:
                 current, measure, kept[name] = trial, value, rate
                 break
+    media = {"groups": {key: list(members) for key, members in groups.items()}, "count": count,
+             "own": {key: own[key] for key in groups}, "largest": largest, "tried": tried}
     if not kept:
-        return choice
-    return replace(choice, medium_rates=kept, predicted_bias=measure,
+        return replace(choice, media=media)
+    return replace(choice, medium_rates=kept, predicted_bias=measure, media=media,
+                   medium_settings={key: own[key] * rate / base for key, rate in kept.items()},
                    reason=f"{choice.reason}; {', '.join(key.split(':', 1)[1] for key in kept)} "
                           f"coarser, within {limit:.2%} still ({measure:.2%})")
 
@@ -289,16 +301,18 @@ def at_fewer_samples(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
     spp = min(float(spp), chosen_spp(choice))
     tried = dict(choice.tried)
     again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
-    if choice.medium_rates and again.biased and again.step_rate == choice.step_rate:
-        # The same scene rate: the media's own coarser steps were measured with it.
-        again = replace(again, medium_rates=choice.medium_rates, medium_settings=choice.medium_settings,
-                        predicted_bias=choice.predicted_bias)
-    elif choice.medium_rates and choice.medium_settings:
-        # They were not measured with the new rate: the materials' and world's own values
-        # again (a run that rendered its pilot with the coarser steps has them set).
-        again = replace(again, medium_settings={
-            key: value * choice.step_rate / choice.medium_rates[key]
-            for key, value in choice.medium_settings.items()})
+    media = choice.media
+    if media and again.biased and again.step_rate == choice.step_rate:
+        # The same scene rate: the media's steps chosen again for the larger tolerance, from
+        # the trials made for the ceiling (a combination not tried counts as failing).
+        measured = {tuple(rates): value for rates, value in media["tried"]}
+        again = per_medium_rates(again, lambda rates: measured.get(tuple(rates), math.inf),
+                                 media["groups"], media["count"], media["own"], CANDIDATE_RATES,
+                                 media["largest"])
+    elif media:
+        # Not measured with the new rate: the materials' and world's own values (a run that
+        # rendered its pilot with coarser steps has them set).
+        again = replace(again, medium_settings=dict(media["own"]), media=media)
     return replace(again, tried=tried, seconds=choice.seconds)
 
 
