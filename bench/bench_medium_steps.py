@@ -13,7 +13,8 @@ scene's own settings: null scattering, 1024 spp, seed 7, denoised like every run
 - ``uniform``: the scene's own settings, 4..64 spp;
 - ``auto``: ``--estimator auto`` (a step per medium), 4..64 spp;
 - ``auto_one_rate``: the same with one scene rate for every medium (the choice before per
-  medium steps; rendered in a second pass with them switched off).
+  medium steps; rendered in a second pass with them switched off);
+- ``guided_auto``: ``--mode guided --estimator auto`` at the times uniform 16 and 32 took.
 
 It prints each auto point's time, error, chosen steps and equal-quality speedups over
 uniform and over the one-rate curve (mean FLIP, p95 region FLIP, share > 0.103, MSE).
@@ -50,7 +51,11 @@ def build_scene(path: Path) -> Path:
 
 
 def _register() -> None:
-    from xsl_render.core.validation.contestants import Contestant, CurveSpec, register_curve, uniform_budgets
+    from xsl_render.core.validation.contestants import (Contestant, CurveSpec, register_curve,
+                                                        time_matched_curve, uniform_budgets)
+
+    register_curve(time_matched_curve("guided", "guided, auto", (1 / 4, 1 / 2), curve="guided_auto",
+                                      params={"importance": "none", "estimator": "auto"}))
 
     for name, label in (("auto", "auto, a step per medium"), ("auto_one_rate", "auto, one rate")):
         def points(ceiling: int, name=name, label=label):
@@ -74,7 +79,7 @@ def report(data: dict, one_rate: dict) -> list[str]:
              "  | vs uniform: FLIP p95tile share MSE | vs one rate: FLIP p95tile share MSE"]
     for source in (data, one_rate):
         for name, seconds, run in _points(source, "uniform") + _points(source, "auto") \
-                + _points(source, "auto_one_rate"):
+                + _points(source, "guided_auto") + _points(source, "auto_one_rate"):
             if source is one_rate and run["curve"] == "uniform":
                 continue
             stats = (run["repeats"][0].get("stats") or {}) if run["repeats"] else {}
@@ -106,9 +111,14 @@ def main(argv=None) -> int:
     from xsl_render.addon.maps import estimator_choice
     from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves
 
-    blend = build_scene(args.out / "statue_fog.blend")
+    # Built once: a .blend is not byte-identical from one build to the next, and the runs
+    # (and the reference) are reused only for the same file.
+    blend = args.out / "statue_fog.blend"
+    if not blend.exists():
+        build_scene(blend)
     _register()
-    settings = CurvesSettings(ceiling=64, resolution=SIZE, repeats=args.repeats, curves=("uniform", "auto"))
+    settings = CurvesSettings(ceiling=64, resolution=SIZE, repeats=args.repeats,
+                              curves=("uniform", "auto", "guided_auto"))
     data = run_curves(blend, settings, args.out / "media")
     # The same uniform runs for the second pass (reused, not rendered again).
     shutil.copytree(args.out / "media" / "runs", args.out / "one_rate" / "runs", dirs_exist_ok=True,
