@@ -30,6 +30,7 @@ from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
+from ..scene.geometry import step_setting
 from ..scene.probe import camera_model, render_size
 from ..scene.state import preserved_scene
 from .tile_render import CyclesWindowRenderer, RenderedWindow
@@ -73,19 +74,14 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
 def apply_estimator(scene, choice) -> None:
     """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
     materials' and the world's own steps too where auto gave some media coarser ones."""
-    import bpy
-
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)
     if choice.biased and choice.step_rate is not None:
         scene.cycles.volume_step_rate = float(choice.step_rate)
     for key, value in (choice.medium_settings or {}).items():
-        kind, name = key.split(":", 1)
-        if kind == "world":
-            bpy.data.worlds[name].cycles.volume_step_size = float(value)
-        else:
-            bpy.data.materials[name].cycles.volume_step_rate = float(value)
+        settings, name = step_setting(key)
+        setattr(settings, name, float(value))
 
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,

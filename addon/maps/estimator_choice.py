@@ -18,7 +18,7 @@ from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, kept_null_scattering, per_medium_rates,
                                                visible_bias)
-from ..scene.geometry import scan_scene
+from ..scene.geometry import scan_scene, step_setting
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
 
@@ -79,7 +79,7 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
             return visible_bias(error.luminance(error.transmittance), error.luminance(error.bias))
 
         choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
-        choice = _per_medium(scene, choice, media, measure, options.step_rate, previous)
+        choice = _per_medium(choice, media, measure, options.step_rate, previous)
     return replace(choice, seconds=time.perf_counter() - started)
 
 
@@ -98,7 +98,7 @@ def step_carriers(media) -> dict:
     return {key: tuple(members) for key, members in groups.items()}
 
 
-def _per_medium(scene, choice: EstimatorChoice, media, measure, largest, previous) -> EstimatorChoice:
+def _per_medium(choice: EstimatorChoice, media, measure, largest, previous) -> EstimatorChoice:
     """``per_medium_rates`` for a still or a range's first frame; a later frame keeps the
     frame before's media rates while its scene rate is the same and they still pass (no
     search: a step that switched from frame to frame would flicker), else none."""
@@ -115,18 +115,8 @@ def _per_medium(scene, choice: EstimatorChoice, media, measure, largest, previou
             return choice
         return replace(choice, medium_rates=previous.medium_rates, medium_settings=previous.medium_settings,
                        predicted_bias=value)
-    own = {key: _carried_step(key) for key in groups}
+    own = {key: float(getattr(*step_setting(key))) for key in groups}
     return per_medium_rates(choice, measure, groups, len(media), own, CANDIDATE_RATES, largest)
-
-
-def _carried_step(key: str) -> float:
-    """The material's ``volume_step_rate`` or the world's ``volume_step_size`` now."""
-    import bpy
-
-    kind, name = key.split(":", 1)
-    if kind == "world":
-        return float(bpy.data.worlds[name].cycles.volume_step_size)
-    return float(bpy.data.materials[name].cycles.volume_step_rate)
 
 
 def with_estimator_choice(scene, options: RenderOptions, spp: float,

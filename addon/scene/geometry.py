@@ -309,6 +309,18 @@ def _slot_material(ob, medium: VolumeMedium):
                  if slot.material is not None and slot.material.name == medium.material), None)
 
 
+def step_setting(key: str) -> tuple[object, str]:
+    """Where the step of the media a key of ``estimator_choice.step_carriers`` names is set:
+    (the world's Cycles settings, "volume_step_size") for "world:<name>", (the material's,
+    "volume_step_rate") for "material:<name>"."""
+    import bpy
+
+    kind, name = key.split(":", 1)
+    if kind == "world":
+        return bpy.data.worlds[name].cycles, "volume_step_size"
+    return bpy.data.materials[name].cycles, "volume_step_rate"
+
+
 def _material_step_rate(material) -> float:
     settings = getattr(material, "cycles", None)
     return float(getattr(settings, "volume_step_rate", 1.0))
