@@ -54,7 +54,7 @@ def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = Non
         return single_render_frame(lambda scene: render(scene, request, chosen, progress), request.mode,
                                    announce=progress is None)
 
-    return estimated_frame(make, request.options, request.estimator_spp)
+    return estimated_frame(make, request.options, request.first_estimator_spp(still=sequence is None))
 
 
 def _gold(scene, request: RenderRequest, options: RenderOptions, progress):

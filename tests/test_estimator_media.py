@@ -17,7 +17,7 @@ from test_ray_marching import _Field, _two_media_scene
 
 from xsl_render.core.maps.camera_rays import CameraRays, MediumIntervals
 from xsl_render.core.media.ray_marching import MarchingPredictor
-from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, at_fewer_samples,
+from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_for,
                                                        choose_step_rate, per_medium_rates,
                                                        tolerated_bias)
 
@@ -118,7 +118,13 @@ def test_nothing_is_predicted_where_no_medium_could_take_its_own_step(choice):
         raise AssertionError("predicted")
     groups = {"material:fog": (0,)} if choice.estimator == "auto" and choice.biased else \
         {"material:fog": (0,), "material:smoke": (1,)}
-    assert per_medium_rates(choice, never, groups, 2, OWN) == choice
+    chosen = per_medium_rates(choice, never, groups, 2, OWN)
+    if choice.estimator == "auto" and choice.biased is False:
+        # Null scattering keeps what carries each step, for a settle that marches.
+        assert chosen.medium_rates is None and chosen.media["tried"] == []
+        assert chosen.media["groups"] == {"material:fog": [0], "material:smoke": [1]}
+    else:
+        assert chosen == choice
 
 
 def test_a_settled_count_chooses_the_media_steps_again_from_the_ceilings_trials():
@@ -134,15 +140,59 @@ def test_a_settled_count_chooses_the_media_steps_again_from_the_ceilings_trials(
     assert chosen.step_rate == 0.5 and chosen.medium_rates == {"material:smoke": 2.0}
     assert chosen.medium_settings == {"material:smoke": pytest.approx(1.5 * 2.0 / 0.5)}
     assert chosen.to_dict()["media"]["tried"][0] == [[4.0, 0.5], 0.5]             # JSON-ready
-    settled = at_fewer_samples(chosen, 16)                            # tolerance 1.25 %
+    settled = settled_for(chosen, 16)                            # tolerance 1.25 %
     assert settled.step_rate == 0.5 and settled.medium_rates == {"material:smoke": 4.0}
     assert settled.medium_settings == {"material:smoke": pytest.approx(1.5 * 4.0 / 0.5)}
     assert settled.predicted_bias == 0.0095
     # Rate 1 passes at 1 spp: the media steps were not measured with it, and the smoke's
     # material gets its own value back (the pilot may have set the coarser one).
-    moved = at_fewer_samples(chosen, 1)
+    moved = settled_for(chosen, 1)
     assert moved.step_rate == 1.0 and moved.medium_rates is None
     assert moved.medium_settings == {"material:fog": 1.0, "material:smoke": 1.5}
+
+
+#: Visible bias of the fog (medium 0) and the smoke (medium 1) at each rate; a frame's is
+#: their sum (each ray crosses one of them).
+FOG = {4.0: 0.15, 2.0: 0.1, 1.0: 0.038, 0.5: 0.006, 0.25: 0.003}
+SMOKE = {4.0: 0.004, 2.0: 0.002, 1.0: 0.001, 0.5: 0.001, 0.25: 0.001}
+
+
+def _predicted():
+    calls = []
+
+    def measure(rates):
+        calls.append(rates)
+        fog, smoke = (rates, rates) if isinstance(rates, float) else rates
+        return FOG[fog] + SMOKE[smoke]
+    return measure, calls
+
+
+@pytest.mark.parametrize("ceiling, count, scene_rate, smoke", [
+    (64, 1, 1.0, 4.0),         # 0.5 at the ceiling, 1 at 1 spp: the smoke at 4 beside it
+    (4096, 16, 0.5, 4.0),      # null scattering at the ceiling, 0.5 at 16 spp
+])
+def test_a_settle_at_another_scene_rate_predicts_the_media_steps_there(ceiling, count, scene_rate, smoke):
+    """While the choice keeps its prediction (a still's run), a settle that moves the scene
+    rate (or leaves null scattering) tries the media's steps at the new rate; without it the
+    materials keep their own values."""
+    from dataclasses import replace
+
+    measure, calls = _predicted()
+    groups = {"material:fog": (0,), "material:smoke": (1,)}
+    chosen = per_medium_rates(choose_step_rate(measure, ceiling), measure, groups, 2, OWN)
+    assert chosen.step_rate != scene_rate
+    kept = replace(chosen, remeasure=measure)
+    assert kept == chosen and "remeasure" not in kept.to_dict()          # not part of the record
+    json.dumps(kept.to_dict())
+    calls.clear()
+    settled = settled_for(kept, count)
+    assert settled.step_rate == scene_rate and settled.medium_rates == {"material:smoke": smoke}
+    assert settled.medium_settings == {"material:smoke": pytest.approx(OWN["material:smoke"] * smoke / scene_rate)}
+    assert (scene_rate, smoke) in calls and all(min(rates) == scene_rate for rates in calls)   # none finer
+    assert settled.predicted_bias == pytest.approx(FOG[scene_rate] + SMOKE[smoke])
+    unkept = settled_for(chosen, count)
+    assert unkept.step_rate == scene_rate and unkept.medium_rates is None
+    assert unkept.medium_settings == {"material:fog": 1.0, "material:smoke": 1.5}
 
 
 # -- in Blender ----------------------------------------------------------------------------
@@ -211,6 +261,33 @@ def test_auto_gives_the_smoke_its_own_step_and_the_scene_gets_its_materials_back
     scene.cycles.volume_step_rate = rate
     assert np.abs(sr.render_uniform(scene, RenderOptions(max_spp=16, denoise=False), spp=16).image
                   - auto.image).max() > 1e-3                        # the smoke's own step showed
+
+
+@pytest.mark.blender
+@pytest.mark.parametrize("first, count", [(4096, 16), (16, 256)])
+def test_settling_a_choice_gives_the_choice_made_for_the_count(blender, first, count):
+    """On the two-media scene, auto's choice for one count settled for another is the choice
+    made for that count directly: from a ceiling no rate passes at (null scattering) down to
+    16 spp, the scene rate from the trials made, the smoke's own step predicted at it; from
+    16 spp (what a still's time budget chooses for first) up to 256, the finer rates
+    predicted then."""
+    from xsl_render.addon.maps.estimator_choice import choose_estimator
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = _two_media_scene(blender)
+    scene.render.resolution_x, scene.render.resolution_y = W, H
+    options = RenderOptions(max_spp=4096, estimator="auto").check()
+    chosen = choose_estimator(scene, options, first)
+    direct = choose_estimator(scene, options, count)
+    assert chosen.remeasure is not None and chosen.step_rate != direct.step_rate
+    if first > count:
+        assert chosen.biased is False and chosen.media["tried"] == []
+    assert direct.biased and direct.medium_rates
+    settled = settled_for(chosen, count)
+    assert (settled.biased, settled.step_rate, settled.medium_rates, settled.medium_settings) \
+        == (direct.biased, direct.step_rate, direct.medium_rates, direct.medium_settings)
+    assert settled.predicted_bias == pytest.approx(direct.predicted_bias)
+    assert settled.tolerance == pytest.approx(direct.tolerance)
 
 
 @pytest.mark.blender
@@ -297,7 +374,7 @@ def test_guided_renders_the_media_steps_it_settles_on(blender, monkeypatch):
         return real_render(self, *args, **kwargs)
 
     monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
-    monkeypatch.setattr(guided_render, "at_fewer_samples", lambda choice, spp: settled)
+    monkeypatch.setattr(guided_render, "settled_for", lambda choice, spp: settled)
     outcome = guided_render.render_guided(scene, options, GuidedOptions(time_budget=2.0))
     assert seen[0] == 8.0 and seen[-1] == 2.0
     assert outcome.stats.estimator["medium_settings"] == {"material:smoke": 2.0}

@@ -12,7 +12,7 @@ import json
 
 import pytest
 
-from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, at_fewer_samples,
+from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_for,
                                                        choose_step_rate, chosen_spp, fixed_choice,
                                                        provisional_choice, tolerated_bias)
 
@@ -32,11 +32,37 @@ def _auto(spp: float) -> EstimatorChoice:
     (16, 64, 0.5),           # more than the choice's count: its own count
 ])
 def test_a_smaller_count_settles_on_the_rate_auto_chooses_for_it(ceiling, count, rate):
-    settled = at_fewer_samples(_auto(ceiling), count)
+    settled = settled_for(_auto(ceiling), count)
     assert settled.biased and settled.step_rate == rate
     assert settled == _auto(min(count, ceiling)) or settled.tried != _auto(min(count, ceiling)).tried
     assert settled.step_rate == _auto(min(count, ceiling)).step_rate
     assert settled.tolerance == pytest.approx(tolerated_bias(min(count, ceiling)))
+
+
+@pytest.mark.parametrize("first, count, rate, predicted", [
+    (16, 1024, 0.25, (0.5, 0.25)),     # 0.5 at 16 spp; 1024 needs 0.25, predicted now
+    (16, 32, 0.5, ()),                 # 0.5 passes at 32 spp's tolerance too (0.8 % <= 0.88 %)
+    (16, 64, 0.25, (0.25,)),           # not at 64's (0.63 %): 0.25 predicted
+    (64, 4, 0.5, ()),                  # fewer: from the trials made
+])
+def test_a_choice_that_keeps_its_prediction_settles_finer_too(first, count, rate, predicted):
+    """A still's time budget chooses for at most 16 spp first; where its pilot affords more,
+    the settle predicts the finer rates it needs (only those not tried yet)."""
+    from dataclasses import replace
+
+    calls = []
+
+    def measure(rate):
+        calls.append(rate)
+        return MEASURES[rate]
+    chosen = replace(choose_step_rate(measure, first), remeasure=measure)
+    calls.clear()
+    settled = settled_for(chosen, count)
+    assert settled.step_rate == rate and tuple(calls) == tuple(r for r in predicted if r not in chosen.tried)
+    assert settled.tolerance == pytest.approx(tolerated_bias(count))
+    assert set(chosen.tried) <= set(settled.tried)
+    # Without the prediction a larger count is taken as the choice's own.
+    assert settled_for(replace(chosen, remeasure=None), 1024).tolerance == pytest.approx(chosen.tolerance)
 
 
 def test_settling_needs_no_new_prediction():
@@ -48,9 +74,9 @@ def test_settling_needs_no_new_prediction():
 
     at_ceiling = choose_step_rate(measure, 4096)
     asked = len(calls)
-    assert at_fewer_samples(at_ceiling, 4).step_rate == 0.5
+    assert settled_for(at_ceiling, 4).step_rate == 0.5
     assert len(calls) == asked
-    assert at_fewer_samples(at_ceiling, 4).tried == at_ceiling.tried
+    assert settled_for(at_ceiling, 4).tried == at_ceiling.tried
 
 
 def test_the_provisional_choice_marches_where_auto_chose_null_scattering():
@@ -83,7 +109,7 @@ def test_a_range_keeps_null_scattering_without_predicting():
 ])
 def test_choices_without_predictions_stay_as_they_are(choice):
     assert provisional_choice(choice) is choice
-    assert at_fewer_samples(choice, 4) is choice
+    assert settled_for(choice, 4) is choice
 
 
 @pytest.mark.blender
@@ -115,7 +141,7 @@ def test_guided_switches_to_the_settled_estimator_and_restores_the_scene(blender
         return real_render(self, *args, **kwargs)
 
     monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
-    monkeypatch.setattr(guided_render, "at_fewer_samples", lambda choice, spp: settled)
+    monkeypatch.setattr(guided_render, "settled_for", lambda choice, spp: settled)
     outcome = guided_render.render_guided(scene, options, GuidedOptions(time_budget=3.0))
     # sync and pilot (1 + more samples) provisional, then sync, pilot and the final pass settled
     assert seen[0] == (True, 0.25) and seen[-1] == (True, 2.0)

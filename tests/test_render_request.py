@@ -37,6 +37,17 @@ def test_requests_each_mode_takes(request_, spp):
     assert request_.unbounded == (request_.options is UNBOUNDED)
 
 
+@pytest.mark.parametrize("request_, still, spp", [
+    (RenderRequest("guided", OPTIONS, guided=GUIDED), True, float(GUIDED_SPP)),   # settles later
+    (RenderRequest("guided", OPTIONS, guided=GUIDED), False, 64.0),              # a range keeps it
+    (RenderRequest("guided", RenderOptions(max_spp=8), guided=GUIDED), True, 8.0),
+    (RenderRequest("uniform", OPTIONS, spp=32), True, 32.0),
+    (RenderRequest("xs", OPTIONS, map_options=MapOptions()), True, 64.0),
+])
+def test_a_stills_time_budget_chooses_for_a_modest_count_first(request_, still, spp):
+    assert request_.check().first_estimator_spp(still) == spp
+
+
 @pytest.mark.parametrize("request_, message", [
     (RenderRequest("fast", OPTIONS), "--mode must be one of gold, xs"),
     (RenderRequest("guided", OPTIONS), "--mode guided needs --time-budget SECONDS"),

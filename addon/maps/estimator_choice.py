@@ -80,6 +80,10 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
 
         choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
         choice = _per_medium(choice, media, measure, options.step_rate, previous)
+        if previous is None:
+            # Kept for a time-budgeted still's settle, which may need finer rates or the
+            # media's steps at another scene rate (``settled_for``).
+            choice = replace(choice, remeasure=measure)
     return replace(choice, seconds=time.perf_counter() - started)
 
 

@@ -163,14 +163,26 @@ class RenderRequest:
     def estimator_spp(self) -> float:
         """The samples per pixel the run gives its pixels at most, which sets how much bias
         the estimator ``auto`` tolerates: its sample count when it has one (uniform), a time
-        budget's ceiling (or ``GUIDED_SPP`` without one; guided settles the choice for the
-        count its pilot finds affordable, ``volume_estimator.at_fewer_samples``), the ceiling
-        otherwise (xs and xsl give some pixels that many)."""
+        budget's ceiling (or ``GUIDED_SPP`` without one; a still's guided render chooses for
+        at most ``GUIDED_SPP`` first, ``first_estimator_spp``), the ceiling otherwise (xs and
+        xsl give some pixels that many)."""
         if self.spp:
             return float(self.spp)
         if self.traits.time_budget and not self.options.has_ceiling:
             return float(GUIDED_SPP)
         return float(self.options.max_spp)
+
+    def first_estimator_spp(self, still: bool) -> float:
+        """The count auto chooses for before the run starts. A still's time budget learns
+        its count from its pilot and settles the choice for it (``volume_estimator.
+        settled_for``: coarser from the predictions made, finer by predicting more), so it
+        chooses for at most ``GUIDED_SPP`` first: a ceiling of 1024 made it predict every
+        rate down to the finest (5.7 s of a 16 s budget on smoke in fog) for a count it never
+        reached. A range keeps its first choice for every frame, so it chooses for the
+        ceiling (``estimator_spp``)."""
+        if still and self.traits.time_budget:
+            return min(self.estimator_spp, float(GUIDED_SPP))
+        return self.estimator_spp
 
     @property
     def unbounded(self) -> bool:

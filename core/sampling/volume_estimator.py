@@ -6,8 +6,9 @@
 - ``auto``: ray marching at the largest candidate step rate whose predicted visible bias
   stays below the noise the run's samples leave; else at the finest rate while its bias stays
   within twice that (``NULL_SCATTERING_MARGIN``); else null scattering. A run that learns its
-  count only while it renders (a time budget) chooses for its ceiling, renders its pilot
-  with ``provisional_choice`` and settles with ``at_fewer_samples`` once the count is known.
+  count only while it renders (a time budget) chooses for a count first (a still: its ceiling,
+  at most ``render_request.GUIDED_SPP``; a range: its ceiling), renders its pilot with
+  ``provisional_choice`` and settles with ``settled_for`` once the count is known.
 
 Why ray marching pays: Blender 5 builds a majorant octree for null scattering at every scene
 sync (3.2-3.7 s on the noise-fog example scenes, more than a 16-spp render at 256x144), and
@@ -31,7 +32,8 @@ to 64 spp. 0.05 puts 4 spp's tolerance at 2.5 %, 16 spp's at 1.25 % and 64 spp's
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
+from typing import Callable
 
 import numpy as np
 
@@ -120,13 +122,18 @@ class EstimatorChoice:
     #: given for it, next to the scene rate ``step_rate``.
     medium_rates: dict | None = None
     medium_settings: dict | None = None
-    #: What ``per_medium_rates`` worked with, so that ``at_fewer_samples`` can choose again
+    #: What ``per_medium_rates`` worked with, so that ``settled_for`` can choose again
     #: without predicting: {"groups": {key: [media]}, "count": media, "own": {key: the
     #: material's or world's own value}, "largest": rate cap, "tried": [[rates, measure]...]}.
     media: dict | None = None
+    #: The prediction itself (``measure_at`` of ``per_medium_rates``), kept while the run
+    #: lasts so that a settle at another scene rate can try the media's steps there; not
+    #: part of the record (``to_dict``) nor of equality.
+    remeasure: Callable | None = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict:
-        data = asdict(self)
+        data = asdict(replace(self, remeasure=None))
+        del data["remeasure"]
         if self.tried is not None:
             data["tried"] = {f"{rate:g}": value for rate, value in self.tried.items()}
         return data
@@ -217,16 +224,19 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
 
     ``own``: each key's value now (the material's ``volume_step_rate``, the world's
     ``volume_step_size``); ``medium_settings`` is it times the medium's rate over the scene
-    rate. The trials are kept in ``media`` (``at_fewer_samples``).
+    rate. The trials are kept in ``media`` (``settled_for``).
     """
-    if choice.estimator != "auto" or not choice.biased or choice.step_rate is None \
-            or choice.tolerance is None or choice.predicted_bias is None or len(groups) < 2:
+    if choice.estimator != "auto" or choice.biased is None or choice.tolerance is None or len(groups) < 2:
         return choice
+    media = {"groups": {key: list(members) for key, members in groups.items()}, "count": count,
+             "own": {key: own[key] for key in groups}, "largest": largest, "tried": []}
+    if not choice.biased or choice.step_rate is None or choice.predicted_bias is None:
+        return replace(choice, media=media)        # (a settle that marches may try them)
     limit = max(choice.tolerance, choice.predicted_bias)
     base = choice.step_rate
     coarser = sorted((r for r in rates if r > base and (largest is None or r <= largest)), reverse=True)
     current = [base] * count
-    kept, measure, tried = {}, choice.predicted_bias, []
+    kept, measure, tried = {}, choice.predicted_bias, media["tried"]
     for name, members in groups.items():
         for rate in coarser:
             trial = list(current)
@@ -237,8 +247,6 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
             if value <= limit:
                 current, measure, kept[name] = trial, value, rate
                 break
-    media = {"groups": {key: list(members) for key, members in groups.items()}, "count": count,
-             "own": {key: own[key] for key in groups}, "largest": largest, "tried": tried}
     if not kept:
         return replace(choice, media=media)
     return replace(choice, medium_rates=kept, predicted_bias=measure, media=media,
@@ -272,7 +280,7 @@ def chosen_spp(choice: EstimatorChoice) -> float:
 
 def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
     """What a time-budgeted run renders its pilot with, before it knows the count its budget
-    affords (``at_fewer_samples`` then settles the choice): auto's ray-marching choice as it
+    affords (``settled_for`` then settles the choice): auto's ray-marching choice as it
     is, and where auto chose null scattering, ray marching at the finest rate it predicted.
     Ray marching syncs the scene in milliseconds; null scattering builds Blender 5's octree
     (seconds), which a pilot that ends in ray marching would have paid for nothing. Choices
@@ -289,27 +297,47 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
                                   f"({choice.reason})", seconds=choice.seconds)
 
 
-def at_fewer_samples(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
-    """Auto's ``choice`` made again for a run that gives its pixels ``spp`` samples, from the
-    predictions it holds (no new ones): a time budget's count, known only after its pilot,
-    is often below the ceiling the choice was made for, and a larger tolerance may admit a
-    coarser step. ``spp`` above the choice's own count is taken as that count (finer rates
-    than it tried would be needed). Choices other than auto's, or without predictions, are
-    returned unchanged."""
+def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
+    """Auto's ``choice`` made again for a run that gives its pixels ``spp`` samples: a time
+    budget's count, known only after its pilot.
+
+    Fewer samples than the choice was made for allow more bias, so a coarser step may pass:
+    chosen from the predictions the choice holds. More samples need a finer step: predicted
+    while the choice keeps its prediction (``remeasure``, a still's run), which is why a
+    still's time budget chooses for a modest count first; without it ``spp`` is taken as the
+    choice's own count. The media's own steps are chosen again too: from the trials made at
+    the same scene rate, else predicted at the new one (``remeasure``), else the materials'
+    and world's own values. Choices other than auto's, or without predictions, are returned
+    unchanged."""
     if choice.estimator != "auto" or choice.biased is None or not choice.tried or not choice.tolerance:
         return choice
-    spp = min(float(spp), chosen_spp(choice))
     tried = dict(choice.tried)
-    again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
+    if choice.remeasure is None:
+        spp = min(float(spp), chosen_spp(choice))
+        again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
+    else:
+        # Finer rates than were tried (down to the finest candidate) are predicted now.
+        rates = tuple(r for r in CANDIDATE_RATES if r <= max(tried))
+
+        def measure_rate(rate):
+            if rate not in tried:
+                tried[rate] = choice.remeasure(rate)
+            return tried[rate]
+        again = choose_step_rate(measure_rate, float(spp), rates=rates)
     media = choice.media
-    if media and again.biased and again.step_rate == choice.step_rate:
-        # The same scene rate: the media's steps chosen again for the larger tolerance, from
-        # the trials made for the ceiling (a combination not tried counts as failing).
+    if media and again.biased and (again.step_rate == choice.step_rate or choice.remeasure is not None):
+        # The media's steps chosen again for the new tolerance: from the trials made at the
+        # same scene rate, else predicted while the prediction is at hand (else a
+        # combination not tried counts as failing).
         measured = {tuple(rates): value for rates, value in media["tried"]}
-        again = per_medium_rates(again, lambda rates: measured.get(tuple(rates), math.inf),
-                                 media["groups"], media["count"], media["own"], CANDIDATE_RATES,
-                                 media["largest"])
-    elif media:
+
+        def measure_at(rates):
+            if tuple(rates) in measured:
+                return measured[tuple(rates)]
+            return math.inf if choice.remeasure is None else choice.remeasure(rates)
+        again = per_medium_rates(again, measure_at, media["groups"], media["count"], media["own"],
+                                 CANDIDATE_RATES, media["largest"])
+    elif media and again.biased:
         # Not measured with the new rate: the materials' and world's own values (a run that
         # rendered its pilot with coarser steps has them set).
         again = replace(again, medium_settings=dict(media["own"]), media=media)
