@@ -264,8 +264,9 @@ def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
 
 
 #: A whole-frame count this little above a power of two is rounded down to it (see
-#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``: measured at 16-24 samples, and a
-#: quarter of a large budget left unused would cost more than a pattern's evenness wins.
+#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``. Measured up to 48 samples; a wider
+#: slack would gain more (next docstring) but could leave more than the 15 % of a budget
+#: unused that the guided renders are held to.
 POWER_OF_TWO_SLACK = 1.25
 POWER_OF_TWO_LARGEST = 32
 
@@ -273,10 +274,14 @@ POWER_OF_TWO_LARGEST = 32
 def sobol_friendly(count: int) -> int:
     """``count`` samples per pixel, or the power of two below it when that is within
     ``POWER_OF_TWO_SLACK``: Cycles' sample patterns stratify best at powers of two, and after
-    denoising the difference shows. Measured (uniform, ray marching, 256x192, seed 0, FLIP
-    against the converged reference): balls_a 16 spp 0.0407, 17 spp 0.0431, 20 spp 0.0439,
-    24 spp 0.0393; balls_b 16 / 18 / 20 spp 0.0516 / 0.0518 / 0.0506. So 17-20 samples
-    cost up to a quarter more time than 16 for no better (or a worse) frame."""
+    denoising the difference shows. Measured (uniform, auto's estimator, mean FLIP against
+    the converged reference, medians of 4 seeds, 2 for 22 and 36-48, in
+    ``docs/bench_sample_counts.txt``): balls_a
+    16 / 18 / 20 / 22 / 24 spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44
+    / 48 spp 0.0307 / 0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp
+    0.0454 / 0.0457 / 0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520
+    / 0.0503 / 0.0479. So 17-19 samples cost up to a fifth more time than 16 for the same or
+    a worse frame; on balls_a even 22 and 44 are no better than 16 and 32."""
     count = int(count)
     if count < 2:
         return max(count, 1)
