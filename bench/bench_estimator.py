@@ -77,6 +77,18 @@ def _best_fixed(data: dict) -> list[tuple[str, float, dict]]:
             if run["curve"].startswith("biased_") and not name.endswith(f"_{FLOOR_SPP}spp")]
 
 
+#: The last line of every bench table here.
+SPEEDUP_NOTE = ("speedup = time the curve needs for the run's error / the run's time; "
+                "* extrapolated beyond the curve's measured range")
+
+
+def error_cells(run: dict, seconds: float, width: int = 28) -> str:
+    """A run's label, seconds and errors (mean FLIP, p95 region FLIP, share > 0.103, MSE):
+    the first columns of every bench table here."""
+    return (f"{run['label'][:width]:{width}s} {seconds:6.2f} {run['flip'] or 0:7.4f} "
+            f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} {run['mse'] or 0:9.2e}")
+
+
 def speedup_cell(speedups: dict, metric: str) -> str:
     """A fixed-width table cell: the speedup on ``metric``, '*' when read beyond the curve."""
     entry = speedups.get(metric) or {}
@@ -108,16 +120,13 @@ def report_scene(scene: str, data: dict) -> list[str]:
         over_auto = ({} if run["curve"] == "auto" else
                      speedups_against(auto, (name, run["seconds"], run), metrics).get("auto", {}))
 
-        lines.append(f"{run['label'][:28]:28s} {run['seconds']:6.2f} {run['flip'] or 0:7.4f} "
-                     f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} "
-                     f"{run['mse'] or 0:9.2e} {rate:>10s} | "
+        lines.append(error_cells(run, run["seconds"]) + f" {rate:>10s} | "
                      + " ".join(speedup_cell(over, m) for m in METRICS) + " | "
                      + " ".join(speedup_cell(against, m) for m in METRICS) + " | "
                      + " ".join(speedup_cell(over_auto, m) for m in METRICS)
                      + (f" | {run.get('jod') or 0:6.3f} {speedup_cell(over, 'jod')} {speedup_cell(over_auto, 'jod')}"
                         if "jod" in metrics else ""))
-    lines.append("speedup = time the curve needs for the run's error / the run's time; "
-                 "* extrapolated beyond the curve's measured range")
+    lines.append(SPEEDUP_NOTE)
     return lines
 
 

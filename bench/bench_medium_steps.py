@@ -69,7 +69,7 @@ def _points(data: dict, curve: str) -> list:
 
 
 def report(data: dict, one_rate: dict) -> list[str]:
-    from bench_estimator import speedup_cell
+    from bench_estimator import SPEEDUP_NOTE, error_cells, speedup_cell
     from xsl_render.core.validation.curves import speedups_against
 
     baselines = {"uniform": _points(data, "uniform"), "one_rate": _points(one_rate, "auto_one_rate")}
@@ -92,13 +92,10 @@ def report(data: dict, one_rate: dict) -> list[str]:
             def fmt(baseline, metric):
                 return speedup_cell(over.get(baseline) or {}, metric)
             own = {"uniform": "uniform", "auto_one_rate": "one_rate"}.get(run["curve"])
-            lines.append(f"{run['label'][:30]:30s} {seconds:6.2f} {run['flip'] or 0:7.4f} "
-                         f"{run.get('flip_tile95') or 0:7.4f} {run.get('flip_share') or 0:7.3f} "
-                         f"{run['mse'] or 0:9.2e}  {steps:22s} | "
+            lines.append(error_cells(run, seconds, 30) + f"  {steps:22s} | "
                          + " ".join("   -  " if own == "uniform" else fmt("uniform", m) for m in METRICS) + " | "
                          + " ".join("   -  " if own == "one_rate" else fmt("one_rate", m) for m in METRICS))
-    lines.append("speedup = time the curve needs for the run's error / the run's time; "
-                 "* extrapolated beyond the curve's measured range")
+    lines.append(SPEEDUP_NOTE)
     return lines
 
 
