@@ -314,34 +314,37 @@ def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
     tried = dict(choice.tried)
     if choice.remeasure is None:
         spp = min(float(spp), chosen_spp(choice))
-        again = choose_step_rate(tried.__getitem__, spp, rates=tuple(tried))
+        rates = tuple(tried)
     else:
         # Finer rates than were tried (down to the finest candidate) are predicted now.
         rates = tuple(r for r in CANDIDATE_RATES if r <= max(tried))
-
-        def measure_rate(rate):
-            if rate not in tried:
-                tried[rate] = choice.remeasure(rate)
-            return tried[rate]
-        again = choose_step_rate(measure_rate, float(spp), rates=rates)
+    again = choose_step_rate(_known_or_predicted(tried, choice.remeasure), float(spp), rates=rates)
     media = choice.media
     if media and again.biased and (again.step_rate == choice.step_rate or choice.remeasure is not None):
         # The media's steps chosen again for the new tolerance: from the trials made at the
         # same scene rate, else predicted while the prediction is at hand (else a
         # combination not tried counts as failing).
-        measured = {tuple(rates): value for rates, value in media["tried"]}
-
-        def measure_at(rates):
-            if tuple(rates) in measured:
-                return measured[tuple(rates)]
-            return math.inf if choice.remeasure is None else choice.remeasure(rates)
-        again = per_medium_rates(again, measure_at, media["groups"], media["count"], media["own"],
-                                 CANDIDATE_RATES, media["largest"])
+        measured = {tuple(trial): value for trial, value in media["tried"]}
+        again = per_medium_rates(again, _known_or_predicted(measured, choice.remeasure), media["groups"],
+                                 media["count"], media["own"], CANDIDATE_RATES, media["largest"])
     elif media and again.biased:
         # Not measured with the new rate: the materials' and world's own values (a run that
         # rendered its pilot with coarser steps has them set).
         again = replace(again, medium_settings=dict(media["own"]), media=media)
     return replace(again, tried=tried, seconds=choice.seconds)
+
+
+def _known_or_predicted(known: dict, remeasure):
+    """A measure that looks up ``known`` (a rate, or a tuple of rates per medium) and
+    predicts what it lacks with ``remeasure``, keeping it there; without one, what is not
+    known counts as failing (inf)."""
+    def measure(key):
+        if key not in known:
+            if remeasure is None:
+                return math.inf
+            known[key] = remeasure(key)
+        return known[key]
+    return measure
 
 
 def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dict,
