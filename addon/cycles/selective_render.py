@@ -73,7 +73,10 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
 
 def apply_estimator(scene, choice) -> None:
     """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
-    materials' and the world's own steps too where auto gave some media coarser ones."""
+    materials' and the world's own steps too where auto gave some media coarser ones, and
+    the sample pattern where auto chose one."""
+    if choice.sample_pattern is not None:
+        scene.cycles.sampling_pattern = choice.sample_pattern
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)

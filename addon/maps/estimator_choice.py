@@ -15,6 +15,7 @@ from dataclasses import replace
 from ...core.maps.transmittance import medium_segments
 from ...core.media.ray_marching import MarchingPredictor, medium_step, sample_pixels
 from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, kept_null_scattering, per_medium_rates,
                                                visible_bias)
@@ -34,9 +35,11 @@ FOLLOWING_FRAME_PIXELS = 200
 
 def choose_estimator(scene, options: RenderOptions, spp: float,
                      previous: EstimatorChoice | None = None) -> EstimatorChoice:
-    """The volume estimator a run of ``spp`` samples per pixel renders with.
+    """The volume estimator a run of ``spp`` samples per pixel renders with, and for auto the
+    sample pattern (Blender 5's blue noise where the file carries the legacy one:
+    ``core.sampling.sample_pattern``).
 
-    ``options.estimator`` other than auto is taken as given; auto predicts (module notes),
+    ``options.estimator`` other than auto is taken as given; auto predicts (``_volumes``),
     never trying a step rate above ``options.step_rate`` when one is given, and keeping
     ``previous`` (the frame before's choice) unless the prediction clearly says otherwise
     (``choose_step_rate``); a previous null scattering is kept without predicting
@@ -44,6 +47,13 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
     """
     if options.estimator != "auto":
         return fixed_choice(options.estimator, options.step_rate)
+    return replace(_volumes(scene, options, spp, previous),
+                   sample_pattern=auto_sample_pattern(scene.cycles.sampling_pattern))
+
+
+def _volumes(scene, options: RenderOptions, spp: float,
+             previous: EstimatorChoice | None) -> EstimatorChoice:
+    """Auto's volume estimator: the prediction of the module notes."""
     kept = kept_null_scattering(previous, spp)
     if kept is not None:
         return kept

@@ -198,8 +198,9 @@ def preserved_scene(scene):
         for name, struct in structs.items():
             restore_values(struct, saved[name])
         if touched:
-            # Cycles' volume settings are add-on properties, which do not tag the scene: with
-            # the artist's persistent data on, their next render would keep the block's. Only
+            # Cycles' volume settings (and its sample pattern) are add-on properties, which do
+            # not tag the scene: with the artist's persistent data on, their next render would
+            # keep the block's. Only
             # the outermost block tags: an inner one (a frame of a range) would make the next
             # frame sync the whole scene again (Blender 5's octree for null scattering). A
             # material's or the world's own step needs its own tag.
@@ -231,11 +232,12 @@ _open_blocks: dict[int, int] = {}
 
 def _volume_changes(structs: dict, saved: dict) -> set[str]:
     """The ``_structs`` names whose volume settings (``volume_*`` of Cycles, the world and
-    the materials) differ from the ``saved`` values."""
+    the materials, and Cycles' sample pattern, which auto may set too) differ from the
+    ``saved`` values."""
     return {name for name, struct in structs.items()
             if (name in ("cycles", "world_cycles") or name.startswith("material_cycles:"))
             and any(value != saved[name].get(prop) for prop, value in rna_values(struct).items()
-                    if prop.startswith("volume_"))}
+                    if prop.startswith("volume_") or prop == "sampling_pattern")}
 
 
 def _render_output(item) -> bool:

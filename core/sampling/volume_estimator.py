@@ -105,6 +105,8 @@ class EstimatorChoice:
     ``biased`` None and ``step_rate`` None mean the scene's own settings.
     ``predicted_bias`` is the visible-bias measure at the chosen rate (auto), ``tolerance``
     what the run's samples allow, ``tried`` each rate auto predicted: {rate: measure}.
+    ``sample_pattern``: Cycles' sample pattern auto renders with where the scene carries the
+    legacy one (``core.sampling.sample_pattern``), None for the scene's own.
     """
 
     estimator: str
@@ -130,6 +132,7 @@ class EstimatorChoice:
     #: lasts so that a settle at another scene rate can try the media's steps there; not
     #: part of the record (``to_dict``) nor of equality.
     remeasure: Callable | None = field(default=None, repr=False, compare=False)
+    sample_pattern: str | None = None
 
     def to_dict(self) -> dict:
         data = asdict(replace(self, remeasure=None))
@@ -139,14 +142,16 @@ class EstimatorChoice:
         return data
 
     def describe(self) -> str:
+        pattern = "" if self.sample_pattern is None else \
+            f"; sample pattern {self.sample_pattern} (Blender 5's blue noise, not the file's legacy one)"
         if self.biased is None:
-            return "the scene's own volume settings"
+            return "the scene's own volume settings" + pattern
         if not self.biased:
-            return "null scattering (unbiased)"
+            return "null scattering (unbiased)" + pattern
         rate = "the scene's step rate" if self.step_rate is None else f"step rate {self.step_rate:g}"
         coarser = "".join(f", {key.split(':', 1)[1]} at {value:g}"
                           for key, value in (self.medium_rates or {}).items())
-        return f"ray marching at {rate}{coarser}"
+        return f"ray marching at {rate}{coarser}{pattern}"
 
 
 def fixed_choice(estimator: str, step_rate: float | None) -> EstimatorChoice:
@@ -294,7 +299,8 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
     return EstimatorChoice("auto", biased=True, step_rate=finest, predicted_bias=choice.tried[finest],
                            tolerance=choice.tolerance, tried=choice.tried,
                            reason=f"provisional: the finest rate, until the budget's count is known "
-                                  f"({choice.reason})", seconds=choice.seconds)
+                                  f"({choice.reason})", seconds=choice.seconds,
+                           sample_pattern=choice.sample_pattern)
 
 
 def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
@@ -331,7 +337,7 @@ def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
         # Not measured with the new rate: the materials' and world's own values (a run that
         # rendered its pilot with coarser steps has them set).
         again = replace(again, medium_settings=dict(media["own"]), media=media)
-    return replace(again, tried=tried, seconds=choice.seconds)
+    return replace(again, tried=tried, seconds=choice.seconds, sample_pattern=choice.sample_pattern)
 
 
 def _known_or_predicted(known: dict, remeasure):
