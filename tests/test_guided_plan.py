@@ -245,9 +245,9 @@ def test_a_sequence_never_starves_a_frame():
     assert sequence.next_budget() == MIN_FRAME_SHARE * 2.0
 
 
-@pytest.mark.parametrize("count, friendly", [(0, 1), (1, 1), (2, 2), (3, 3), (5, 5), (9, 8), (13, 13),
-                                             (16, 16), (19, 16), (20, 20), (24, 24), (39, 32), (40, 40),
-                                             (70, 70), (600, 600)])
+@pytest.mark.parametrize("count, friendly", [(0, 1), (1, 1), (2, 2), (3, 3), (5, 4), (6, 6), (9, 8), (11, 8),
+                                             (12, 12), (16, 16), (19, 16), (23, 16), (24, 24), (39, 32),
+                                             (47, 32), (48, 48), (70, 70), (600, 600)])
 def test_a_whole_frame_count_just_above_a_power_of_two_is_rounded_down_to_it(count, friendly):
     assert sobol_friendly(count) == friendly
 
@@ -280,3 +280,14 @@ def test_a_later_frame_prices_a_sample_over_the_last_frames():
         sequence.observe(1.0, 2e6, 16)                          # the dear frame leaves the window
     assert sequence.rate == pytest.approx(0.5e-6)
     assert "recent" not in sequence.to_dict() and sequence.to_dict()["rate"] == sequence.rate
+
+
+@pytest.mark.parametrize("first, affordable, count", [
+    (16, 16, 16), (16, 14, 16), (16, 13, 13),     # held down to 85 % of the first column's count
+    (16, 31, 16), (16, 32, 32), (16, 47, 32),     # and up to (not including) twice it
+    (8, 5, 4), (12, 12, 12), (12, 30, 30), (1, 1, 1), (1, 3, 3), (16, 11, 8),
+])
+def test_later_columns_of_a_flat_pass_keep_the_first_ones_count_while_the_clock_allows(first, affordable, count):
+    from xsl_render.core.sampling.guided_plan import column_count
+
+    assert column_count(first, affordable) == count

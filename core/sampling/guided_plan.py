@@ -264,10 +264,10 @@ def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
 
 
 #: A whole-frame count this little above a power of two is rounded down to it (see
-#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``. Measured up to 48 samples; a wider
-#: slack would gain more (next docstring) but could leave more than the 15 % of a budget
-#: unused that the guided renders are held to.
-POWER_OF_TWO_SLACK = 1.25
+#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``. Measured up to 48 samples. The
+#: budget is a ceiling: a run may end up to a third early, where the extra samples would
+#: have bought little (statue, road, balls_b) or made the frame worse (balls_a).
+POWER_OF_TWO_SLACK = 1.5
 POWER_OF_TWO_LARGEST = 32
 
 
@@ -275,13 +275,20 @@ def sobol_friendly(count: int) -> int:
     """``count`` samples per pixel, or the power of two below it when that is within
     ``POWER_OF_TWO_SLACK``: Cycles' sample patterns stratify best at powers of two, and after
     denoising the difference shows. Measured (uniform, auto's estimator, mean FLIP against
-    the converged reference, medians of 4 seeds, 2 for 22 and 36-48, in
-    ``docs/bench_sample_counts.txt``): balls_a
-    16 / 18 / 20 / 22 / 24 spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44
-    / 48 spp 0.0307 / 0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp
-    0.0454 / 0.0457 / 0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520
-    / 0.0503 / 0.0479. So 17-19 samples cost up to a fifth more time than 16 for the same or
-    a worse frame; on balls_a even 22 and 44 are no better than 16 and 32."""
+    the converged reference, in ``docs/bench_sample_counts.txt``), with the legacy Tabulated
+    Sobol pattern (medians of 4 seeds, 2 for 22 and 36-48): balls_a 16 / 18 / 20 / 22 / 24
+    spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44 / 48 spp 0.0307 /
+    0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp 0.0454 / 0.0457 /
+    0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520 / 0.0503 /
+    0.0479. With the blue noise auto renders with (``sample_pattern``; means of 2 seeds):
+    balls_a 16 / 18 / 20 / 22 / 24 / 28 / 32 spp 0.0377 / 0.0476 / 0.0463 / 0.0421 / 0.0373 /
+    0.0383 / 0.0274; statue 16 / 20 / 22 / 24 / 32 spp 0.0445 / 0.0439 / 0.0421 / 0.0411 /
+    0.0378; balls_b 16 / 20 / 22 spp 0.0505 / 0.0491 / 0.0484; road 0.0400 / 0.0387 /
+    0.0377. So on balls_a every count from 17 to 31 is no better than 16, with blue noise
+    much worse at 18-22; elsewhere 20-23 samples buy 2-6 % of FLIP for 25-45 % more time,
+    about what the power of two's own curve gives, so rounding them down costs nothing in
+    equal-quality speed. Guided's three columns at mean counts of 35-37 spp measured FLIP
+    0.0308 on balls_a, where 32 in every column gave 0.0274 (``docs/bench_sample_pattern.txt``)."""
     count = int(count)
     if count < 2:
         return max(count, 1)
@@ -289,6 +296,22 @@ def sobol_friendly(count: int) -> int:
     if power > POWER_OF_TWO_LARGEST:
         return count
     return power if count < POWER_OF_TWO_SLACK * power else count
+
+
+def column_count(first: int, affordable: int) -> int:
+    """The count of a flat pass's later column: the first column's while the column affords
+    from ``HOLD_RANGE[0]`` of it to less than twice it, else ``sobol_friendly(affordable)``.
+
+    One frame at one count: the pilot's timing is noisy at small budgets (a quarter-resolution
+    render of a few samples in ~0.07 s), and the columns paced after a misjudged first one
+    came out uneven, which scored worse than their mean count (balls_a at uniform 16 spp's
+    time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp, mean FLIP 0.0564 / 0.0445 /
+    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the first column's
+    count beyond what a column affords by the clock (the budget's 15 %) or leaves a column
+    short of twice it unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
+    if HOLD_RANGE[0] * first <= affordable < 2 * first:
+        return first
+    return sobol_friendly(affordable)
 
 
 class BudgetPacer:
