@@ -1,0 +1,115 @@
+"""Benchmark: what auto's sample pattern is worth, and auto's speed over a Blender 5 file.
+
+The example scenes carry Cycles' legacy sample pattern (Tabulated Sobol: their build script
+starts from Blender's factory settings, which version to it, as every file saved before
+Blender 4.2 does); a file made in Blender 5 has blue noise (``core.sampling.sample_pattern``).
+``--estimator auto`` renders the legacy pattern with blue noise. Per scene (at
+``bench_estimator.SIZES``, against the same converged reference) this runs:
+
+- on the scene as it is: ``uniform`` (the file's own settings: legacy pattern, null
+  scattering), ``auto`` (auto's volume estimator and blue noise) and ``guided_auto``
+  (``--mode guided --estimator auto`` at uniform 16 and 32 spp's time), as
+  ``bench_estimator.py --no-rates`` does;
+- on a copy whose only change is Blender 5's pattern: ``uniform`` again, the baseline of a
+  file made in Blender 5 (so ``auto`` over it is the volume estimator's gain alone).
+
+It prints every run's errors and its equal-quality speedup over both uniform curves and over
+auto's. Run it on an otherwise idle machine (the times are the measure).
+
+    .venv/bin/python bench/bench_sample_pattern.py --out bench-pattern --repeats 3
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_estimator import METRICS, ROOT, SIZES, SPEEDUP_NOTE, _register, error_cells, speedup_cell  # noqa: E402
+
+SCENES = ("road", "balls_a", "balls_b", "statue")
+
+_SET_PATTERN = """
+import bpy, sys
+source, target, pattern = sys.argv[sys.argv.index("--") + 1:]
+bpy.ops.wm.open_mainfile(filepath=source)
+for scene in bpy.data.scenes:
+    scene.cycles.sampling_pattern = pattern
+bpy.ops.wm.save_as_mainfile(filepath=target, copy=True)
+"""
+
+
+def blue_noise_copy(scene: str, folder: Path) -> Path:
+    """The example scene saved with Blender 5's sample pattern, nothing else changed (in a
+    fresh Python: opening a file here would replace the bench's own Blender data)."""
+    from xsl_render.core.sampling.sample_pattern import BLENDER_DEFAULT
+
+    target = folder / f"{scene}.blend"
+    subprocess.run([sys.executable, "-c", _SET_PATTERN, "--", str(ROOT / "example_blends" / f"{scene}.blend"),
+                    str(target), BLENDER_DEFAULT], check=True, capture_output=True)
+    return target
+
+
+def report(scene: str, data: dict, blue: dict) -> list[str]:
+    from xsl_render.core.validation.curves import speedups_against
+
+    def members(source: dict, curve: str) -> list:
+        return [(name, run["seconds"], run) for name, run in source["runs"].items() if run["curve"] == curve]
+
+    baselines = {"legacy": members(data, "uniform"), "blue": members(blue, "uniform"),
+                 "auto": members(data, "auto")}
+    size = data["scene"]["size"]
+    lines = [f"\n{scene} ({size[0]}x{size[1]}, {len(data['seeds'])} repeat(s))",
+             f"{'run':34s} {'s':>6s} {'FLIP':>7s} {'p95tile':>7s} {'>0.103%':>7s} {'MSE':>9s} | "
+             "vs uniform, file's pattern: FLIP p95 share MSE | vs uniform, blue noise: FLIP p95 share MSE"
+             " | vs auto: FLIP p95 share MSE"]
+    rows = [(f"blue noise: {run['label']}", run) for run in blue["runs"].values()]
+    rows += [(run["label"], run) for run in data["runs"].values()]
+    for label, run in rows:
+        entry = (label, run["seconds"], run)
+        over = speedups_against(baselines, entry, METRICS)
+        lines.append(error_cells(run | {"label": label}, run["seconds"], width=34) + " | "
+                     + " | ".join(" ".join(speedup_cell(over.get(name, {}), m) for m in METRICS)
+                                  for name in ("legacy", "blue", "auto")))
+    lines.append(SPEEDUP_NOTE)
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=Path("bench-pattern"), help="folder of the curves")
+    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated example scenes")
+    parser.add_argument("--repeats", type=int, default=3, help="repeats per run; medians (default 3)")
+    args = parser.parse_args(argv)
+    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
+    unknown = [s for s in scenes if s not in SCENES]
+    if unknown:
+        print(f"bench_sample_pattern: unknown scene '{unknown[0]}' (choose from {', '.join(SCENES)})",
+              file=sys.stderr)
+        return 2
+
+    from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves
+
+    lines = [f"bench_sample_pattern: {', '.join(scenes)}, ceiling 64, median of {args.repeats}"]
+    with tempfile.TemporaryDirectory(prefix="bench-pattern-") as folder:
+        for scene in scenes:
+            settings = CurvesSettings(ceiling=64, resolution=SIZES[scene], repeats=args.repeats,
+                                      curves=_register(scene, False, rates=False), vdp=False)
+            data = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)
+            copy = blue_noise_copy(scene, Path(folder))
+            blue = run_curves(copy, CurvesSettings(ceiling=64, resolution=SIZES[scene], repeats=args.repeats,
+                                                   curves=("uniform",), vdp=False,
+                                                   reference=Path(data["reference"]["path"])),
+                              args.out / f"{scene}_blue_noise")
+            scene_lines = report(scene, data, blue)
+            print("\n".join(scene_lines), flush=True)
+            lines += scene_lines
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench_sample_pattern.txt").write_text("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
