@@ -130,11 +130,27 @@ def report_scene(scene: str, data: dict) -> list[str]:
     return lines
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path("bench-estimator"), help="folder of the curves")
-    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated example scenes")
+def scene_arguments(doc: str, out: str, scenes: tuple[str, ...]) -> argparse.ArgumentParser:
+    """A bench's parser with what every example-scene bench takes: --out, --scenes, --repeats."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=Path(out), help="folder of the curves")
+    parser.add_argument("--scenes", default=",".join(scenes), help="comma-separated example scenes")
     parser.add_argument("--repeats", type=int, default=3, help="repeats per run; medians (default 3)")
+    return parser
+
+
+def chosen_scenes(args, scenes: tuple[str, ...], bench: str) -> list[str] | None:
+    """The scenes ``--scenes`` asked for, or None once the first unknown one is reported."""
+    chosen = [s.strip() for s in args.scenes.split(",") if s.strip()]
+    unknown = [s for s in chosen if s not in scenes]
+    if unknown:
+        print(f"{bench}: unknown scene '{unknown[0]}' (choose from {', '.join(scenes)})", file=sys.stderr)
+        return None
+    return chosen
+
+
+def main(argv=None) -> int:
+    parser = scene_arguments(__doc__, "bench-estimator", SCENES)
     parser.add_argument("--resolution", default=None, help="render size WxH (default: SIZES)")
     parser.add_argument("--floor", action="store_true", help=f"also each step rate at {FLOOR_SPP} spp")
     parser.add_argument("--no-guided", action="store_true", help="leave out the guided runs")
@@ -143,11 +159,8 @@ def main(argv=None) -> int:
     parser.add_argument("--scored", action="store_true",
                         help="also guided with the pilot's error scores (--guided-exponent 0.15)")
     args = parser.parse_args(argv)
-    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
-    unknown = [s for s in scenes if s not in SCENES]
-    if unknown:
-        print(f"bench_estimator: unknown scene '{unknown[0]}' (choose from {', '.join(SCENES)})",
-              file=sys.stderr)
+    scenes = chosen_scenes(args, SCENES, "bench_estimator")
+    if scenes is None:
         return 2
     size = tuple(int(v) for v in args.resolution.lower().split("x")) if args.resolution else None
 

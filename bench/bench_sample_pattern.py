@@ -20,14 +20,14 @@ auto's. Run it on an otherwise idle machine (the times are the measure).
 """
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_estimator import METRICS, ROOT, SIZES, SPEEDUP_NOTE, _register, error_cells, speedup_cell  # noqa: E402
+from bench_estimator import (METRICS, ROOT, SIZES, SPEEDUP_NOTE, _register, chosen_scenes,  # noqa: E402
+                             error_cells, scene_arguments, speedup_cell)
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
 
@@ -78,16 +78,9 @@ def report(scene: str, data: dict, blue: dict) -> list[str]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path("bench-pattern"), help="folder of the curves")
-    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated example scenes")
-    parser.add_argument("--repeats", type=int, default=3, help="repeats per run; medians (default 3)")
-    args = parser.parse_args(argv)
-    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
-    unknown = [s for s in scenes if s not in SCENES]
-    if unknown:
-        print(f"bench_sample_pattern: unknown scene '{unknown[0]}' (choose from {', '.join(SCENES)})",
-              file=sys.stderr)
+    args = scene_arguments(__doc__, "bench-pattern", SCENES).parse_args(argv)
+    scenes = chosen_scenes(args, SCENES, "bench_sample_pattern")
+    if scenes is None:
         return 2
 
     from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves

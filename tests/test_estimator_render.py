@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from support.artist_render import artists_f12
 from support.fog_scene import build_fog_scene
 from test_cli_info import one_line_error
 from test_ray_marching import _two_media_scene
@@ -175,22 +176,10 @@ def test_the_artists_next_render_after_a_run_uses_the_artists_volume_settings(bl
     next F12. Our run's volume settings are put back, but untagged add-on properties do not
     reach a persistent session; ``preserved_scene`` tags the scene when the block changed them
     (restoring other settings tags it too today, so this guards against losing both)."""
-    from xsl_render.core.imageio import read_image
-
     scene = _two_media_scene(blender)
     scene.render.resolution_x, scene.render.resolution_y = W, H
-    scene.render.use_persistent_data = True
     scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, 0.25
-    scene.cycles.samples, scene.cycles.seed, scene.cycles.use_denoising = 2, 3, False
-    scene.render.image_settings.file_format = "OPEN_EXR"
-
-    scene.render.filepath = str(tmp_path / "f12")
-
-    def artists_render():
-        # Nothing assigned in between: assigning any scene property, even its own value,
-        # tags the scene, which would hide the bug.
-        blender.ops.render.render(write_still=True, scene=scene.name)
-        return read_image(tmp_path / "f12.exr")
+    artists_render = artists_f12(blender, scene, tmp_path, seed=3)
 
     before = artists_render()
     options = RenderOptions(max_spp=2, estimator="biased", step_rate=4.0).check()

@@ -81,11 +81,11 @@ def test_a_new_pattern_reaches_cycles_in_one_persistent_session_and_the_artists_
     """The pattern is an add-on property, which does not tag the scene: without the tag
     Cycles kept rendering the pattern it synced first (the same pixels), and with the
     artist's persistent data on, their next render would keep ours."""
+    from support.artist_render import artists_f12
     from support.fog_scene import build_fog_scene
 
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_volumes
     from xsl_render.addon.scene.state import preserved_scene
-    from xsl_render.core.imageio import read_image
 
     scene = build_fog_scene(blender, W, H)
     forget_synced_volumes()
@@ -97,16 +97,8 @@ def test_a_new_pattern_reaches_cycles_in_one_persistent_session_and_the_artists_
             blue = renderer.render(None, 2).pixels
     assert not (legacy == blue).all()
 
-    scene.render.use_persistent_data = True
     scene.cycles.sampling_pattern = LEGACY
-    scene.cycles.samples, scene.cycles.seed, scene.cycles.use_denoising = 2, 0, False
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.render.filepath = str(tmp_path / "f12")
-
-    def artists_render():
-        blender.ops.render.render(write_still=True, scene=scene.name)
-        return read_image(tmp_path / "f12.exr")
-
+    artists_render = artists_f12(blender, scene, tmp_path)
     first = artists_render()
     with preserved_scene(scene):
         scene.cycles.sampling_pattern = BLENDER_DEFAULT
