@@ -9,7 +9,7 @@ from support.fog_scene import build_fog_scene
 from xsl_render.addon.cycles.guided_render import render_guided
 from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
 from xsl_render.addon.scene.state import preserved_scene, settings_dump
-from xsl_render.core.sampling.guided_plan import GuidedOptions
+from xsl_render.core.sampling.guided_plan import POWER_OF_TWO_SLACK, GuidedOptions
 from xsl_render.core.sampling.pass_merge import PassAccumulator
 from xsl_render.core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
@@ -75,7 +75,9 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
     outcome = render_guided(fog, RenderOptions(max_spp=UNBOUNDED_SPP, tile_size=16, resolution=(96, 54)),
                             GuidedOptions(time_budget=budget, exponent=exponent))
     stats = outcome.stats
-    assert 0.85 * budget <= stats.wall_s <= 1.1 * budget     # early by 15 % at most (issue 20)
+    # Over by 10 % at most; early by up to a third where a power of two's count is the
+    # better frame (sobol_friendly, column_count).
+    assert budget / POWER_OF_TWO_SLACK <= stats.wall_s <= 1.1 * budget
     assert stats.wall_s == pytest.approx(sum(stats.phases_s.values()))
     assert outcome.samples.min() >= 1 and stats.pilot_spp >= 1
     if exponent == 0:
