@@ -16,8 +16,9 @@
    (``RenderRequest.first_estimator_spp``; the pilot renders with that choice, or with ray
    marching where it was null scattering: ``provisional_choice``); its choice is now settled
    for the affordable count (``settled_for``: a finer step predicted where the count is
-   larger), and where that differs the scene syncs again and the pilot is rendered again. (A range keeps the
-   ceiling's choice: it pays null scattering's octree once, see ``guided_steps``.)
+   larger), and where that differs the scene syncs again and the pilot is rendered again.
+   (A range keeps the ceiling's choice: it pays null scattering's octree once, see
+   ``guided_steps``.)
 4. Scores (``exponent`` > 0 only): the pilot denoised, its display luminance's gradient per
    tile (``core/sampling/guided_plan``, which also says why the pilot is thrown away and why
    the default spreads the samples evenly instead).
@@ -29,13 +30,15 @@
    frame's cost per pixel by up to a third: Cycles pays a fixed cost per sample pass); the
    later columns keep the first one's count while the clock allows (``column_count``: one
    count per frame), and a count up to 1.5x a power of two renders at it
-   (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render of the whole frame stopped
-   by Cycles' own time limit instead of the columns was measured on the four example scenes,
-   medians of 3: a tie, 0.87x of auto's uniform curve on mean FLIP against the columns'
-   0.84x, each scene and budget within the run-to-run spread; Cycles' time-limited render
-   paid 5-15 % more per sample. The whole frame in two renders of one sample sequence, the
-   second sized by what the first cost and continuing it with Cycles' sample subset, tied
-   too: within 3 % of the columns' FLIP. README, "The guided sampler's default".)
+   (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
+   of the whole frame stopped by Cycles' own time limit instead of the columns was measured
+   on the four example scenes, medians of 3: a tie, 0.87x of auto's uniform curve on mean
+   FLIP against the columns' 0.84x, each scene and budget within the run-to-run spread;
+   Cycles' time-limited render paid 5-15 % more per sample. The whole frame in two renders
+   of one sample sequence, the second sized by what the first cost and continuing it with
+   Cycles' sample subset, tied too: within 3 % of the columns' FLIP; and it cannot continue
+   a blue-noise sequence, which Cycles lays out by the render's own sample count. README,
+   "The guided sampler's default".)
 6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
 
 Every setting touched is put back (``preserved_scene``) after success, error or cancel.
