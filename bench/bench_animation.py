@@ -65,10 +65,10 @@ def scene_path() -> Path:
     return ROOT / "example_blends" / f"{SCENE}.blend"
 
 
-def render_frames(folder: Path, frames: str, *args) -> dict:
-    """One process rendering ``frames``: its wall time and per-frame stats."""
+def render_frames(folder: Path, frames: str, *args, scene: Path | None = None) -> dict:
+    """One process rendering ``frames`` of ``scene`` (the example): its wall time and per-frame stats."""
     folder.mkdir(parents=True, exist_ok=True)
-    seconds, _ = xsl("render", scene_path(), "--frames", frames, "--max-spp", MAX_SPP, "--quiet",
+    seconds, _ = xsl("render", scene or scene_path(), "--frames", frames, "--max-spp", MAX_SPP, "--quiet",
                      "--out", folder / "frame_####.exr", "--stats", folder / "stats.json", *args)
     stats = json.loads((folder / "stats.json").read_text())
     return {"seconds": seconds, "frames": stats["frames"]}
@@ -124,7 +124,7 @@ def sessions(out: Path, frames: str, count: int, repeats: int) -> None:
           f"frame ({per_frame_separate * n:.1f} s for {n}): {per_frame_separate * n / one['seconds']:.2f}x")
 
 
-def quality(out: Path, frames: str, repeats: int) -> None:
+def quality(out: Path, frames: str, repeats: int, blue_noise: bool = False, with_xsl: bool = True) -> None:
     from xsl_render.core.validation.curves import Point, as_error, equal_quality_speedup
     from xsl_render.core.validation.vdp import vdp_unavailable_reason
 
@@ -136,10 +136,10 @@ def quality(out: Path, frames: str, repeats: int) -> None:
         "--out", reference / "frame_####.exr")
     runs: dict[str, dict] = {}
 
-    def run(name: str, *args) -> dict:
+    def run(name: str, *args, scene: Path | None = None) -> dict:
         def once(i):
             folder = out / "runs" / f"{name}_{i}"
-            result = render_frames(folder, frames, *args)
+            result = render_frames(folder, frames, *args, scene=scene)
             return result | {"folder": folder}
 
         chosen = median_run(repeats, once)
@@ -156,7 +156,16 @@ def quality(out: Path, frames: str, repeats: int) -> None:
         guided = run(f"guided_{spp}", "--mode", "guided", "--time-budget", f"{budget:.3f}")
         guided["budget"] = budget
 
-    run("xsl", "--mode", "xsl")          # the paper's map, ceiling 64: its flicker
+    if with_xsl:
+        run("xsl", "--mode", "xsl")      # the paper's map, ceiling 64: its flicker
+    if blue_noise:
+        # What a file made in Blender 5 renders with (street, like every example, carries the
+        # legacy pattern, which auto and guided replace): the baseline for such a file.
+        from bench_sample_pattern import blue_noise_copy
+
+        copy = blue_noise_copy(SCENE, out)
+        for spp in UNIFORM_SPP[:-1]:
+            run(f"blue_noise_uniform_{spp}", "--mode", "uniform", "--spp", spp, scene=copy)
 
     print(f"\n## quality along the sequence: {SCENE}, frames {frames} (median of {repeats}; times "
           "are whole processes)")
@@ -169,26 +178,29 @@ def quality(out: Path, frames: str, repeats: int) -> None:
               f"{m['flip_share']:.2f} | {m['mse']:.3g} | {m['flicker']:.4f} | {jod} |")
     if not video:
         print(f"(video JOD not measured: {vdp_unavailable_reason()})")
-    print("\nequal-quality speedup over uniform (scene settings), each metric:")
-    for name, result in runs.items():
-        if name.startswith("uniform"):
-            continue
-        cells = []
-        for metric in criteria:
-            curve = [Point(r["seconds"], as_error(metric, r["metrics"][metric]), n) for n, r in runs.items()
-                     if n.startswith("uniform")]
-            speedup = equal_quality_speedup(curve, as_error(metric, result["metrics"][metric]),
-                                            result["seconds"])
-            value = "n/a" if speedup.value is None else f"{speedup.value:.2f}x" + ("*" if speedup.extrapolated else "")
-            cells.append(f"{metric} {value}")
-        print(f"  {name}: " + ", ".join(cells))
+    for baseline in ("uniform", "blue_noise_uniform")[:1 + blue_noise]:
+        print(f"\nequal-quality speedup over {baseline.replace('_', ' ')} (scene settings), each metric:")
+        for name, result in runs.items():
+            if name.startswith(baseline):
+                continue
+            cells = []
+            for metric in criteria:
+                curve = [Point(r["seconds"], as_error(metric, r["metrics"][metric]), n)
+                         for n, r in runs.items() if n.startswith(baseline)]
+                speedup = equal_quality_speedup(curve, as_error(metric, result["metrics"][metric]),
+                                                result["seconds"])
+                value = ("n/a" if speedup.value is None
+                         else f"{speedup.value:.2f}x" + ("*" if speedup.extrapolated else ""))
+                cells.append(f"{metric} {value}")
+            print(f"  {name}: " + ", ".join(cells))
     for spp in EQUAL_TIME_SPP:
         guided = runs[f"guided_{spp}"]
         render_only = render_only_seconds(guided["frames"])
         print(f"guided at uniform {spp}'s time ({guided['budget']:.2f} s a frame): process "
               f"{guided['seconds']:.1f} s against {render_only:.1f} s of its frames' render-only time "
               f"({guided['seconds'] / render_only:.3f}x); estimator steps chosen: "
-              + ", ".join(sorted({str(stats['estimator'].get('step_rate')) for stats in guided['frames']})))
+              + ", ".join(sorted({str(stats['estimator'].get('step_rate')) for stats in guided['frames']}))
+              + "; spp per frame: " + ", ".join(f"{stats['mean_spp']:g}" for stats in guided["frames"]))
     (out / "animation.json").write_text(json.dumps(
         {name: {k: v for k, v in r.items() if k != "folder"} for name, r in runs.items()}, indent=1,
         default=str))
@@ -222,13 +234,16 @@ def main(argv=None) -> int:
                         help="frames rendered one process each for the sessions table")
     parser.add_argument("--skip-sessions", action="store_true")
     parser.add_argument("--skip-quality", action="store_true")
+    parser.add_argument("--blue-noise", action="store_true",
+                        help="also uniform at 8-32 spp on a copy set to Blender 5's sample pattern")
+    parser.add_argument("--skip-xsl", action="store_true")
     parser.add_argument("--overhead", action="store_true",
                         help="also guided's process time against its frames' render-only time")
     args = parser.parse_args(argv)
     if not args.skip_sessions:
         sessions(args.out, args.frames, args.separate_frames, args.repeats)
     if not args.skip_quality:
-        quality(args.out, args.frames, args.repeats)
+        quality(args.out, args.frames, args.repeats, args.blue_noise, not args.skip_xsl)
     if args.overhead:
         guided_overhead(args.out, args.frames, args.repeats)
     return 0
