@@ -253,20 +253,29 @@ def test_a_whole_frame_count_just_above_a_power_of_two_is_rounded_down_to_it(cou
 
 
 def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
-    from xsl_render.core.sampling.guided_plan import HOLD_RANGE, SequenceBudget
+    from xsl_render.core.sampling.guided_plan import HOLD_RANGE, RANGE_OVERRUN, SequenceBudget
 
     sequence = SequenceBudget(per_frame=2.0, frames=4)
-    assert sequence.steady_count(18.0, 4096) == 16              # no frame before: a fresh count
+    # One sample per pixel of the frame costs 0.1 s: the range's allowance (10 % of 8 s)
+    # shared by the 4 frames left is 2 samples per pixel each.
+    cost = 0.1
+    allowance = RANGE_OVERRUN * 2.0 * 4 / 4 / cost
+    assert sequence.steady_count(18.0, 4096, cost) == 16        # no frame before: a fresh count
     sequence.observe(1.0, 1e6, 16)
     assert (sequence.rate, sequence.spp) == (1e-6, 16)
-    low, high = HOLD_RANGE
-    for affordable in (low * 16, 16.0, 19.0, high * 16):        # within the range: held
-        assert sequence.steady_count(affordable, 4096) == 16
-    assert sequence.steady_count(low * 16 - 1.0, 4096) == 12    # too dear now: fewer
-    assert sequence.steady_count(2 * 16, 4096) == 32            # much more time: more
-    assert sequence.steady_count(16.0, 8) == 8                  # never above the ceiling
+    high = HOLD_RANGE[1]
+    for affordable in (16 - allowance, 16.0, 19.0, high * 16):  # within the range: held
+        assert sequence.steady_count(affordable, 4096, cost) == 16
+    assert sequence.steady_count(16 - allowance - 0.5, 4096, cost) == 13   # too dear now: fewer
+    assert sequence.steady_count(2 * 16, 4096, cost) == 32      # much more time: more
+    assert sequence.steady_count(16.0, 8, cost) == 8            # never above the ceiling
     sequence.observe(0.0, 1e6, 4)                               # nothing measured: kept
     assert sequence.spp == 16
+    for _ in range(3):
+        sequence.record(2.0)
+    # The last frame: the whole allowance is its own (8 spp), so a frame that affords 9 holds 16.
+    assert sequence.steady_count(9.0, 4096, cost) == 16
+    assert sequence.steady_count(7.5, 4096, cost) == 7
 
 
 def test_a_later_frame_prices_a_sample_over_the_last_frames():

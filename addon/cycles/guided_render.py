@@ -235,7 +235,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 phases["pilot"] = phases["scoring"] = 0.0
                 denoise_reserve = reserve
                 left = budget - clock.now() - denoise_reserve - _RENDER_OVERHEAD_S
-                spp = pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp)
+                spp = pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp,
+                                        rate * width * height)
                 final = FinalPass([Rect(0, height, 0, width, spp)], np.full(len(windows), float(spp)), flat=True)
                 paused = clock.pause()
                 yield 0.2, f"guided: the frame at {spp} spp"
@@ -286,6 +287,12 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
                 phases["scoring"] = clock.now() - began
 
+                if pace is not None and pace.frames > 1 and not guided.exponent and importance is None:
+                    # The first frame of a range: what it alone pays (auto's prediction, the
+                    # pilot) goes outside its budget like its sync, for the frames after it to
+                    # pay back, so that it renders the count they will hold (street at uniform
+                    # 32 spp's time: its pilot left it 16 spp where they rendered 32).
+                    budget += clock.now() - phases.get("sync", 0.0)
                 # The final pass: planned for the time left once the final denoise is set aside,
                 # then planned again with each of its renders' fixed cost set aside too.
                 denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0

@@ -372,14 +372,20 @@ class BudgetPacer:
         return float(min(cap, max(0.0, usable / (planned * self.cost_ratio))))
 
 
-#: A later frame of a guided range keeps the frame before's sample count while what it can
-#: afford stays within this range of it (``SequenceBudget.steady_count``).
+#: A flat pass's later column keeps the first one's count from the low end of this range of
+#: it (``column_count``); a later frame of a guided range keeps the frame before's until it
+#: affords more than the high end (``SequenceBudget.steady_count``).
 HOLD_RANGE = (0.85, 1.3)
 #: A later frame prices a sample at what the last this many frames paid for theirs, all
 #: together: a frame's own cost moves with what the camera sees (street: 3.4-4.9 s for the
 #: same 16 spp), and a count priced by the frame before alone followed those moves
 #: (``steady_count`` then let go of the count 4 times in 24 frames).
 RATE_WINDOW = 4
+#: A guided range may end this share over its whole budget to render its frames at one count
+#: (``SequenceBudget.steady_count``): without it a held count that cost a little more than
+#: each frame's share left the last frames to pay back all of it, and they dropped (street,
+#: frames 1-8 at uniform 32 spp's time: 16, 32 x6, 16 spp, each change a flicker).
+RANGE_OVERRUN = 0.1
 #: A frame of a guided animation is never given less than this share of the per-frame budget,
 #: whatever the frames before it overran (a short sequence with a long first sync overruns
 #: its total instead of starving its frames).
@@ -430,13 +436,18 @@ class SequenceBudget:
             self.rate = sum(s for s, _ in self.recent) / sum(n for _, n in self.recent)
             self.spp = int(spp)
 
-    def steady_count(self, affordable: float, ceiling: int) -> int:
-        """The samples per pixel of a later frame that can afford ``affordable``: the frame
-        before's count while it stays within ``HOLD_RANGE`` of that (a count that changes
-        from frame to frame changes the noise, which shows as flicker; the range's budget
-        absorbs the difference), else a fresh one at a count Cycles' patterns like."""
-        low, high = HOLD_RANGE
-        if self.spp and low * self.spp <= affordable <= high * self.spp:
+    def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
+        """The samples per pixel of a later frame that can afford ``affordable`` (its share of
+        what the range has left), one sample per pixel of the whole frame costing
+        ``frame_sample_seconds``: the frame before's count while the frames left can all
+        render it within ``RANGE_OVERRUN`` over the range's budget and this frame does not
+        afford more than ``HOLD_RANGE[1]`` times it (a count that changes from frame to frame
+        changes the noise, which shows as flicker), else a fresh count at one Cycles'
+        patterns like, within the frame's share."""
+        left = max(1, self.frames - self.done)
+        allowance = (RANGE_OVERRUN * self.per_frame * self.frames / left / frame_sample_seconds
+                     if frame_sample_seconds > 0.0 else 0.0)
+        if self.spp and self.spp <= affordable + allowance and affordable <= HOLD_RANGE[1] * self.spp:
             return max(1, min(self.spp, ceiling))
         return sobol_friendly(max(1, min(int(affordable), ceiling)))
 
