@@ -275,7 +275,28 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
         sequence.record(2.0)
     # The last frame: the whole allowance is its own (8 spp), so a frame that affords 9 holds 16.
     assert sequence.steady_count(9.0, 4096, cost) == 16
-    assert sequence.steady_count(7.5, 4096, cost) == 7
+    # Too dear for 16: a fresh count (7), raised to the power of two the allowance reaches.
+    assert sequence.steady_count(7.5, 4096, cost) == 8
+
+
+@pytest.mark.parametrize("count, reach, ceiling, expected", [
+    (29, 32.3, 4096, 32), (29, 31.9, 4096, 29), (16, 22.0, 4096, 16), (40, 70.0, 4096, 64),
+    (29, 40.0, 30, 29), (7, 15.5, 4096, 8), (1, 0.5, 4096, 1)])
+def test_a_range_raises_its_count_to_the_power_of_two_its_allowance_reaches(count, reach, ceiling, expected):
+    from xsl_render.core.sampling.guided_plan import SequenceBudget
+
+    assert SequenceBudget.up_to_power_of_two(count, reach, ceiling) == expected
+
+
+def test_the_first_frame_of_a_range_takes_the_count_its_frames_can_hold():
+    from xsl_render.core.sampling.guided_plan import SequenceBudget
+
+    # 8 frames of 8 s, a sample per pixel 0.25 s: the allowance is 3.2 spp a frame.
+    sequence = SequenceBudget(per_frame=8.0, frames=8)
+    assert sequence.first_count(29.5, 4096, 0.25) == 32      # 29 + 3.2 reaches 32
+    assert sequence.first_count(27.0, 4096, 0.25) == 27      # it does not
+    assert sequence.first_count(20.0, 4096, 0.25) == 16      # rounded down (sobol_friendly)
+    assert sequence.first_count(29.5, 24, 0.25) == 24        # the ceiling
 
 
 def test_a_later_frame_prices_a_sample_over_the_last_frames():

@@ -323,7 +323,10 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     # takes as many as fit, at a count Cycles' patterns stratify well.
                     wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
                     spp = max(1, min(wanted, options.max_spp))
-                    if final.flat:
+                    if final.flat and pace is not None and pace.frames > 1:
+                        # A range's first frame (one render): the count its frames can hold.
+                        spp = pace.first_count(spp, options.max_spp, rate * width * height)
+                    elif final.flat:
                         # One count for the whole frame while the clock allows (``column_count``).
                         spp = sobol_friendly(spp) if first_column is None else column_count(first_column, spp)
                         first_column = first_column or spp

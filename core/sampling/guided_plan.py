@@ -436,6 +436,20 @@ class SequenceBudget:
             self.rate = sum(s for s, _ in self.recent) / sum(n for _, n in self.recent)
             self.spp = int(spp)
 
+    def allowance(self, frame_sample_seconds: float) -> float:
+        """Samples per pixel a frame may render beyond its share: the frames left share
+        ``RANGE_OVERRUN`` of the range's budget (one sample per pixel of the whole frame
+        costing ``frame_sample_seconds``)."""
+        if frame_sample_seconds <= 0.0:
+            return 0.0
+        return RANGE_OVERRUN * self.per_frame * self.frames / max(1, self.frames - self.done) / frame_sample_seconds
+
+    def first_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
+        """The first frame's count: what it affords at a count Cycles' patterns like, or the
+        power of two above it when the allowance reaches it (``up_to_power_of_two``)."""
+        count = sobol_friendly(max(1, min(int(affordable), ceiling)))
+        return self.up_to_power_of_two(count, affordable + self.allowance(frame_sample_seconds), ceiling)
+
     def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
         """The samples per pixel of a later frame that can afford ``affordable`` (its share of
         what the range has left), one sample per pixel of the whole frame costing
@@ -443,13 +457,26 @@ class SequenceBudget:
         render it within ``RANGE_OVERRUN`` over the range's budget and this frame does not
         afford more than ``HOLD_RANGE[1]`` times it (a count that changes from frame to frame
         changes the noise, which shows as flicker), else a fresh count at one Cycles'
-        patterns like, within the frame's share."""
-        left = max(1, self.frames - self.done)
-        allowance = (RANGE_OVERRUN * self.per_frame * self.frames / left / frame_sample_seconds
-                     if frame_sample_seconds > 0.0 else 0.0)
-        if self.spp and self.spp <= affordable + allowance and affordable <= HOLD_RANGE[1] * self.spp:
-            return max(1, min(self.spp, ceiling))
-        return sobol_friendly(max(1, min(int(affordable), ceiling)))
+        patterns like, within the frame's share; either raised to the power of two above it
+        where the allowance reaches it."""
+        reach = affordable + self.allowance(frame_sample_seconds)
+        if self.spp and self.spp <= reach and affordable <= HOLD_RANGE[1] * self.spp:
+            count = max(1, min(self.spp, ceiling))
+        else:
+            count = sobol_friendly(max(1, min(int(affordable), ceiling)))
+        return self.up_to_power_of_two(count, reach, ceiling)
+
+    @staticmethod
+    def up_to_power_of_two(count: int, reach: float, ceiling: int) -> int:
+        """The largest power of two within ``reach`` (and the ceiling) where that is above
+        ``count``, else ``count``. A power of two renders better than the count below it
+        beyond what the samples add (Blender 5's blue noise, street frame 1: 28 spp mean
+        FLIP 0.0690, 32 spp 0.0662; a guided range at 29 spp on every frame scored 0.0697)."""
+        top = int(min(reach, ceiling))
+        if top < 1:
+            return count
+        power = 1 << (top.bit_length() - 1)
+        return max(power, count)
 
     def to_dict(self) -> dict:
         data = asdict(self)
