@@ -256,8 +256,8 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
     from xsl_render.core.sampling.guided_plan import HOLD_RANGE, RANGE_OVERRUN, SequenceBudget
 
     sequence = SequenceBudget(per_frame=2.0, frames=4)
-    # One sample per pixel of the frame costs 0.1 s: the range's allowance (10 % of 8 s)
-    # shared by the 4 frames left is 2 samples per pixel each.
+    # One sample per pixel of the frame costs 0.1 s: the range's allowance (5 % of 8 s)
+    # shared by the 4 frames left is 1 sample per pixel each.
     cost = 0.1
     allowance = RANGE_OVERRUN * 2.0 * 4 / 4 / cost
     assert sequence.steady_count(18.0, 4096, cost) == 16        # no frame before: a fresh count
@@ -266,15 +266,15 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
     high = HOLD_RANGE[1]
     for affordable in (16 - allowance, 16.0, 19.0, high * 16):  # within the range: held
         assert sequence.steady_count(affordable, 4096, cost) == 16
-    assert sequence.steady_count(16 - allowance - 0.5, 4096, cost) == 13   # too dear now: fewer
+    assert sequence.steady_count(16 - allowance - 0.5, 4096, cost) == 14   # too dear now: fewer
     assert sequence.steady_count(2 * 16, 4096, cost) == 32      # much more time: more
     assert sequence.steady_count(16.0, 8, cost) == 8            # never above the ceiling
     sequence.observe(0.0, 1e6, 4)                               # nothing measured: kept
     assert sequence.spp == 16
     for _ in range(3):
         sequence.record(2.0)
-    # The last frame: the whole allowance is its own (8 spp), so a frame that affords 9 holds 16.
-    assert sequence.steady_count(9.0, 4096, cost) == 16
+    # The last frame: the whole allowance is its own (4 spp), so a frame that affords 12 holds 16.
+    assert sequence.steady_count(12.0, 4096, cost) == 16
     # Too dear for 16: a fresh count (7), raised to the power of two the allowance reaches.
     assert sequence.steady_count(7.5, 4096, cost) == 8
 
@@ -291,10 +291,10 @@ def test_a_range_raises_its_count_to_the_power_of_two_its_allowance_reaches(coun
 def test_the_first_frame_of_a_range_takes_the_count_its_frames_can_hold():
     from xsl_render.core.sampling.guided_plan import SequenceBudget
 
-    # 8 frames of 8 s, a sample per pixel 0.25 s: the allowance is 3.2 spp a frame.
+    # 8 frames of 8 s, a sample per pixel 0.25 s: the allowance is 1.6 spp a frame.
     sequence = SequenceBudget(per_frame=8.0, frames=8)
-    assert sequence.first_count(29.5, 4096, 0.25) == 32      # 29 + 3.2 reaches 32
-    assert sequence.first_count(27.0, 4096, 0.25) == 27      # it does not
+    assert sequence.first_count(30.5, 4096, 0.25) == 32      # 30 + 1.6 reaches 32
+    assert sequence.first_count(29.5, 4096, 0.25) == 29      # it does not
     assert sequence.first_count(20.0, 4096, 0.25) == 16      # rounded down (sobol_friendly)
     assert sequence.first_count(29.5, 24, 0.25) == 24        # the ceiling
 
