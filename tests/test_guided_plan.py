@@ -293,10 +293,10 @@ def test_the_first_frame_of_a_range_takes_the_count_its_frames_can_hold():
 
     # 8 frames of 8 s, a sample per pixel 0.25 s: the allowance is 1.6 spp a frame.
     sequence = SequenceBudget(per_frame=8.0, frames=8)
-    assert sequence.first_count(30.5, 4096, 0.25) == 32      # 30 + 1.6 reaches 32
-    assert sequence.first_count(29.5, 4096, 0.25) == 29      # it does not
-    assert sequence.first_count(20.0, 4096, 0.25) == 16      # rounded down (sobol_friendly)
-    assert sequence.first_count(29.5, 24, 0.25) == 24        # the ceiling
+    assert sequence.steady_count(30.5, 4096, 0.25) == 32      # 30 + 1.6 reaches 32
+    assert sequence.steady_count(29.5, 4096, 0.25) == 29      # it does not
+    assert sequence.steady_count(20.0, 4096, 0.25) == 16      # rounded down (sobol_friendly)
+    assert sequence.steady_count(29.5, 24, 0.25) == 24        # the ceiling
 
 
 def test_a_later_frame_prices_a_sample_over_the_last_frames():

@@ -156,6 +156,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     # null scattering's time at 16 spp, MSE 0.74x and flicker 0.77x at equal time).
     settles = pace is None
     later = pace is not None and bool(pace.rate) and not guided.exponent and importance is None
+    # The first frame of a range of several (``later`` is false for it): see its final pass.
+    range_start = pace is not None and pace.frames > 1 and not later
     used = provisional_choice(chosen) if settles else chosen
     if used is not chosen:
         options = replace(options, estimator_choice=used)
@@ -287,7 +289,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
                 phases["scoring"] = clock.now() - began
 
-                if pace is not None and pace.frames > 1 and not guided.exponent and importance is None:
+                if range_start and not guided.exponent and importance is None:
                     # The first frame of a range: what it alone pays (auto's prediction, the
                     # pilot) goes outside its budget like its sync, for the frames after it to
                     # pay back, so that it renders the count they will hold (street at uniform
@@ -302,7 +304,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 final = plan_final_pass(scores, weights, width, height, guided,
                                         max(0.0, left - _RENDER_OVERHEAD_S * len(final.rects)) / rate,
                                         options.tile_size, options.max_spp)
-                if final.flat and pace is not None and pace.frames > 1:
+                if final.flat and range_start:
                     # The first frame of a range: the whole frame in one render, no columns.
                     # After a render of a window, a later frame of the session no longer got
                     # the pixels a fresh render gives (with blue noise, Blender 5.0's street
@@ -323,9 +325,10 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     # takes as many as fit, at a count Cycles' patterns stratify well.
                     wanted = int(rect.spp * factor) if final.flat else int(round(rect.spp * factor))
                     spp = max(1, min(wanted, options.max_spp))
-                    if final.flat and pace is not None and pace.frames > 1:
-                        # A range's first frame (one render): the count its frames can hold.
-                        spp = pace.first_count(spp, options.max_spp, rate * width * height)
+                    if final.flat and range_start:
+                        # A range's first frame (one render): the count its frames can hold
+                        # (no frame before: a fresh count, raised as the allowance allows).
+                        spp = pace.steady_count(spp, options.max_spp, rate * width * height)
                     elif final.flat:
                         # One count for the whole frame while the clock allows (``column_count``).
                         spp = sobol_friendly(spp) if first_column is None else column_count(first_column, spp)

@@ -445,21 +445,15 @@ class SequenceBudget:
             return 0.0
         return RANGE_OVERRUN * self.per_frame * self.frames / max(1, self.frames - self.done) / frame_sample_seconds
 
-    def first_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
-        """The first frame's count: what it affords at a count Cycles' patterns like, or the
-        power of two above it when the allowance reaches it (``up_to_power_of_two``)."""
-        count = sobol_friendly(max(1, min(int(affordable), ceiling)))
-        return self.up_to_power_of_two(count, affordable + self.allowance(frame_sample_seconds), ceiling)
-
     def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
-        """The samples per pixel of a later frame that can afford ``affordable`` (its share of
-        what the range has left), one sample per pixel of the whole frame costing
+        """The samples per pixel of a frame of the range that can afford ``affordable`` (its
+        share of what the range has left), one sample per pixel of the whole frame costing
         ``frame_sample_seconds``: the frame before's count while the frames left can all
         render it within ``RANGE_OVERRUN`` over the range's budget and this frame does not
         afford more than ``HOLD_RANGE[1]`` times it (a count that changes from frame to frame
         changes the noise, which shows as flicker), else a fresh count at one Cycles'
-        patterns like, within the frame's share; either raised to the power of two above it
-        where the allowance reaches it."""
+        patterns like, within the frame's share (the first frame's, with no frame before);
+        either raised to the power of two above it where the allowance reaches it."""
         reach = affordable + self.allowance(frame_sample_seconds)
         if self.spp and self.spp <= reach and affordable <= HOLD_RANGE[1] * self.spp:
             count = max(1, min(self.spp, ceiling))
