@@ -177,7 +177,7 @@ def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget,
 
 def test_the_first_frame_of_a_guided_range_renders_whole(cli, tmp_path):
     """The first frame of a guided range renders the whole frame in one render (no columns),
-    at the count the frames after it hold.
+    at the count the frames after it hold, priced by a full-resolution pilot.
 
     At 256x144 with auto's blue noise and null scattering (street, guided at uniform 32 spp's
     time), a later frame rendered after the first one's columns had other pixels than a
@@ -196,3 +196,7 @@ def test_the_first_frame_of_a_guided_range_renders_whole(cli, tmp_path):
     assert frames[0]["final_pass"]["renders"] == 1
     assert frames[0]["final_pass"]["rects"][0] | {"spp": 0} == {"row0": 0, "row1": 36, "col0": 0, "col1": 64, "spp": 0}
     assert [frame["renders"] for frame in frames[1:]] == [1, 1]
+    # Its count is the range's: priced at full resolution (a quarter-resolution pilot put a
+    # sample of street at 1.4-1.8x its cost), of 1 and 4 samples.
+    assert frames[0]["pilot_resolution_divisor"] == 1 and frames[0]["pilot_spp"] >= 4
+    assert frames[0]["pilot_seconds"] > 0

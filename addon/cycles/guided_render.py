@@ -18,7 +18,8 @@
    for the affordable count (``settled_for``: a finer step predicted where the count is
    larger), and where that differs the scene syncs again and the pilot is rendered again.
    (A range keeps the ceiling's choice: it pays null scattering's octree once, see
-   ``guided_steps``.)
+   ``guided_steps``.) The first frame of a range pilots at full resolution instead
+   (``_RANGE_PILOT_SPP``): its count is the one the whole range holds.
 4. Scores (``exponent`` > 0 only): the pilot denoised, its display luminance's gradient per
    tile (``core/sampling/guided_plan``, which also says why the pilot is thrown away and why
    the default spreads the samples evenly instead).
@@ -84,6 +85,14 @@ _PILOT_REDUCE = 4
 _PILOT_MIN_EDGE = 16
 #: Most of the budget a pilot that only times the render (exponent 0: nothing scored) takes.
 _CLOCK_PILOT_FRACTION = 0.02
+#: The first frame of a range prices its count (the one every frame of the range holds) with
+#: a pilot at full resolution, of 1 and this many samples. A quarter-resolution pilot's two
+#: renders of street at 256x144 (25 and 50 ms) put a sample's cost at 1.4-1.8x what a 16-32
+#: spp frame paid (Cycles pays a fixed cost per sample pass, ~11 ms there, which a quarter
+#: of the pixels does not dilute), and their timing noise moved the first count from 8 to 24
+#: between repeats; full resolution's 1 and 4 samples came within 5 % (1 and 2: 10-20 %
+#: under). It costs ~1.3 s there, once per range, which the range pays back.
+_RANGE_PILOT_SPP = 4
 
 
 def pilot_reduce(width: int, height: int) -> int:
@@ -158,6 +167,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     later = pace is not None and bool(pace.rate) and not guided.exponent and importance is None
     # The first frame of a range of several (``later`` is false for it): see its final pass.
     range_start = pace is not None and pace.frames > 1 and not later
+    # Its flat plan renders the whole frame once, at the count every frame will hold, priced
+    # by a full-resolution pilot (``_RANGE_PILOT_SPP``).
+    whole_start = range_start and not guided.exponent and importance is None
     used = provisional_choice(chosen) if settles else chosen
     if used is not chosen:
         options = replace(options, estimator_choice=used)
@@ -182,7 +194,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             return piece.seconds - piece.sync_seconds
 
         reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-        reduce = pilot_reduce(width, height)
+        reduce = 1 if whole_start else pilot_reduce(width, height)
 
         def sync(renderer) -> None:
             """A 1-sample render of a few pixels: Cycles syncs the scene."""
@@ -212,8 +224,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             first = renderer.render(None, 1, reduce=reduce)
             fit = int((pilot_share - _RENDER_OVERHEAD_S) / max(first.seconds, 1e-6))
             # (Two samples at least where the rate is all it measures: its two renders' times.)
-            have = max(1 if guided.exponent else min(2, options.max_spp),
-                       min(options.max_spp, _PILOT_MAX_SPP, fit))
+            least = _RANGE_PILOT_SPP if whole_start else 1 if guided.exponent else 2
+            have = max(min(least, options.max_spp), min(options.max_spp, _PILOT_MAX_SPP, fit))
             pilot = renderer.render(None, have, reduce=reduce) if have > 1 else first
             phases["pilot"] = phases.get("pilot", 0.0) + clock.now() - began
             # No time limit: every pilot pixel has exactly ``have`` samples.
@@ -289,7 +301,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 weights = None if importance is None else np.maximum(tile_means(importance, windows), 1e-3)
                 phases["scoring"] = clock.now() - began
 
-                if range_start and not guided.exponent and importance is None:
+                if whole_start:
                     # The first frame of a range: what it alone pays (auto's prediction, the
                     # pilot) goes outside its budget like its sync, for the frames after it to
                     # pay back, so that it renders the count they will hold (street at uniform
