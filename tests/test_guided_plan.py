@@ -279,6 +279,23 @@ def test_a_later_frame_keeps_the_count_of_the_frame_before_while_it_fits():
     assert sequence.steady_count(7.5, 4096, cost) == 8
 
 
+@pytest.mark.parametrize("done, affordable, count", [
+    (4, 40.0, 32), (4, 30.5, 32), (4, 21.0, 16),    # 4 frames left: a fresh count past 1.3x
+    (5, 40.0, 16), (5, 30.5, 16), (7, 60.0, 16),    # the last 3: held as it is
+    (5, 13.5, 16), (5, 12.0, 12), (5, 10.0, 8)])    # and let go of when too dear
+def test_a_range_does_not_raise_its_count_in_its_last_frames(done, affordable, count):
+    from xsl_render.core.sampling.guided_plan import LAST_FRAMES_UNRAISED, SequenceBudget
+
+    assert LAST_FRAMES_UNRAISED == 3
+    # 8 frames of 4 s, a sample per pixel of the frame 0.2 s: the allowance is 2 spp a frame
+    # with 4 frames left, 2.7 with 3.
+    sequence = SequenceBudget(per_frame=4.0, frames=8)
+    sequence.observe(3.2, 1.6e7, 16)
+    for _ in range(done):
+        sequence.record(4.0)
+    assert sequence.steady_count(affordable, 4096, 0.2) == count
+
+
 @pytest.mark.parametrize("count, reach, ceiling, expected", [
     (29, 32.3, 4096, 32), (29, 31.9, 4096, 29), (16, 22.0, 4096, 16), (40, 70.0, 4096, 64),
     (29, 40.0, 30, 29), (7, 15.5, 4096, 8), (1, 0.5, 4096, 1)])

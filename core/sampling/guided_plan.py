@@ -387,6 +387,11 @@ RATE_WINDOW = 4
 #: frames 1-8 at uniform 32 spp's time: 16, 32 x6, 16 spp, each change a flicker). Measured
 #: at 0.1 too; with the pricing error of 2-s frames that ran a 2-frame range 1.12x over.
 RANGE_OVERRUN = 0.05
+#: A held count is not raised in a range's last this many frames: a raise there buys samples
+#: for a few frames at the price of a change of noise that plays as flicker (street, 24
+#: frames at uniform 16 spp's time: 16 x22, then 32, 32 on what the held count had left
+#: unspent). A farm's chunk is a range, so every chunk would end on such a change.
+LAST_FRAMES_UNRAISED = 3
 #: A frame of a guided animation is never given less than this share of the per-frame budget,
 #: whatever the frames before it overran (a short sequence with a long first sync overruns
 #: its total instead of starving its frames).
@@ -453,12 +458,14 @@ class SequenceBudget:
         afford more than ``HOLD_RANGE[1]`` times it (a count that changes from frame to frame
         changes the noise, which shows as flicker), else a fresh count at one Cycles'
         patterns like, within the frame's share (the first frame's, with no frame before);
-        either raised to the power of two above it where the allowance reaches it."""
+        either raised to the power of two above it where the allowance reaches it. In the
+        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is."""
         reach = affordable + self.allowance(frame_sample_seconds)
-        if self.spp and self.spp <= reach and affordable <= HOLD_RANGE[1] * self.spp:
+        closing = self.frames - self.done <= LAST_FRAMES_UNRAISED
+        if self.spp and self.spp <= reach and (closing or affordable <= HOLD_RANGE[1] * self.spp):
             count = max(1, min(self.spp, ceiling))
-        else:
-            count = sobol_friendly(max(1, min(int(affordable), ceiling)))
+            return count if closing else self.up_to_power_of_two(count, reach, ceiling)
+        count = sobol_friendly(max(1, min(int(affordable), ceiling)))
         return self.up_to_power_of_two(count, reach, ceiling)
 
     @staticmethod
