@@ -27,8 +27,9 @@
    the budget once the final denoise is set aside; a pacer rescales every next rectangle to
    the clock, at the rate the finished rectangles showed. A flat plan (nothing scored, no
    importance map: the default) is three columns of the frame, each later one's count set by
-   what those before it cost at full resolution (a quarter-resolution pilot overstates a full
-   frame's cost per pixel by up to a third: Cycles pays a fixed cost per sample pass); the
+   what those before it cost at full resolution (a quarter-resolution pilot's renders of a
+   few tens of milliseconds misjudge a full frame's cost per pixel by up to 2x, either way:
+   their timing noise); the
    later columns keep the first one's count while the clock allows (``column_count``: one
    count per frame), and a count up to 1.5x a power of two renders at it
    (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
@@ -88,10 +89,11 @@ _CLOCK_PILOT_FRACTION = 0.02
 #: The first frame of a range prices its count (the one every frame of the range holds) with
 #: a pilot at full resolution, of 1 and this many samples. A quarter-resolution pilot's two
 #: renders of street at 256x144 (25 and 50 ms) put a sample's cost at 1.4-1.8x what a 16-32
-#: spp frame paid (Cycles pays a fixed cost per sample pass, ~11 ms there, which a quarter
-#: of the pixels does not dilute), and their timing noise moved the first count from 8 to 24
-#: between repeats; full resolution's 1 and 4 samples came within 5 % (1 and 2: 10-20 %
-#: under). It costs ~1.3 s there, once per range, which the range pays back.
+#: spp frame paid, and moved the first count from 8 to 24 between repeats: the timing noise
+#: of renders that short (repeated and averaged over 4-8 samples, windows from 8x8 pixels to
+#: the whole frame cost the same per pixel-sample within their content's spread, no fixed
+#: cost per sample pass showed). Full resolution's 1 and 4 samples came within 5 % (1 and 2:
+#: 10-20 % under). It costs ~1.0-1.3 s there, once per range, which the range pays back.
 _RANGE_PILOT_SPP = 4
 
 

@@ -367,7 +367,7 @@ class BudgetPacer:
         usable = time_left - self.overhead * renders
         # ``side_by_side`` renders (a flat plan's halves) cost alike per sample, so the cap
         # holds against the plan as the finished ones re-priced it: a small pilot may
-        # overstate the cost many times over (a fixed cost per sample pass).
+        # overstate the cost many times over (the timing noise of its short renders).
         cap = self.max_scale / self.cost_ratio if self.side_by_side else self.max_scale
         return float(min(cap, max(0.0, usable / (planned * self.cost_ratio))))
 
