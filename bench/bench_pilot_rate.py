@@ -1,0 +1,101 @@
+"""Benchmark: how well a short reduced-resolution pilot prices a full frame's sample.
+
+A guided still learns what a sample costs from its pilot (``addon/cycles/guided_render.py``):
+the whole frame at a quarter of its resolution, 1 and 2 samples, the difference of their
+times. Per scene and seed this renders, in one Cycles session after the scene sync, the
+pilot at a quarter and at half the resolution with 1, 2 and 4 samples, then the whole frame
+at 16 spp, and prints each estimate's ratio to what the full frame paid per pixel-sample:
+
+- ``diff 1-2`` (shipped), ``diff 1-4``: the difference of two renders, which leaves out a
+  render's fixed cost;
+- ``whole 2``: the 2-sample render less ``_RENDER_OVERHEAD_S``.
+
+The full frame's own seconds are printed too: their spread from seed to seed is the floor
+under any pilot. Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
+(``bench_denoise_guides.AUTO_RATE``) and blue noise.
+
+    .venv/bin/python bench/bench_pilot_rate.py --repeats 4
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_denoise_guides import AUTO_RATE  # noqa: E402
+from bench_estimator import ROOT, SIZES, chosen_scenes, scene_arguments  # noqa: E402
+
+SCENES = ("road", "balls_a", "balls_b", "statue")
+SPP = 16
+REDUCTIONS = (4, 2)
+
+
+def measure(scene_name: str, repeats: int) -> list[str]:
+    import bpy
+
+    from xsl_render.addon.cycles.guided_render import _RENDER_OVERHEAD_S
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+
+    bpy.ops.wm.open_mainfile(filepath=str(ROOT / "example_blends" / f"{scene_name}.blend"), load_ui=False)
+    scene = bpy.context.scene
+    width, height = SIZES[scene_name]
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.cycles.volume_biased = True
+    if AUTO_RATE[scene_name] is not None:
+        scene.cycles.volume_step_rate = AUTO_RATE[scene_name]
+    scene.cycles.sampling_pattern = "AUTOMATIC"
+
+    def timed(renderer, *args, **kwargs) -> float:
+        began = time.perf_counter()
+        renderer.render(*args, **kwargs)
+        return time.perf_counter() - began
+
+    lines = [f"\n{scene_name} ({width}x{height}): estimate / full frame's seconds per pixel-sample",
+             f"{'seed':>4s} {'full s':>7s} " + " ".join(f"{f'1/{r}: diff 1-2':>13s} {'diff 1-4':>8s} {'whole 2':>7s}"
+                                                      for r in REDUCTIONS)]
+    ratios: dict[str, list[float]] = {}
+    fulls = []
+    for seed in range(repeats):
+        with CyclesWindowRenderer(scene, seed, guides=True) as renderer:
+            timed(renderer, (height // 2 - 4, height // 2 + 4, width // 2 - 4, width // 2 + 4), 1)  # sync
+            estimates = {}
+            for reduce in REDUCTIONS:
+                one, two, four = (timed(renderer, None, spp, reduce=reduce) for spp in (1, 2, 4))
+                pixels = (width // reduce) * (height // reduce)
+                estimates[reduce] = ((two - one) / pixels, (four - one) / (3 * pixels),
+                                     (two - _RENDER_OVERHEAD_S) / (2 * pixels))
+            full = timed(renderer, None, SPP)
+        rate = (full - _RENDER_OVERHEAD_S) / (SPP * width * height)
+        fulls.append(full)
+        cells = []
+        for reduce, values in estimates.items():
+            for name, value in zip(("diff 1-2", "diff 1-4", "whole 2"), values):
+                ratios.setdefault(f"1/{reduce} {name}", []).append(value / rate)
+            cells.append(f"{values[0] / rate:13.2f} {values[1] / rate:8.2f} {values[2] / rate:7.2f}")
+        lines.append(f"{seed:4d} {full:7.2f} " + " ".join(cells))
+    lines.append(f"full frame {min(fulls):.2f}-{max(fulls):.2f} s; per estimate, median [min, max]: "
+                 + "; ".join(f"{name} {statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]"
+                             for name, v in ratios.items()))
+    return lines
+
+
+def main(argv=None) -> int:
+    args = scene_arguments(__doc__, "bench-pilot-rate", SCENES).parse_args(argv)
+    scenes = chosen_scenes(args, SCENES, "bench_pilot_rate")
+    if scenes is None:
+        return 2
+    lines = [f"bench_pilot_rate: {', '.join(scenes)}, {args.repeats} seeds"]
+    for scene in scenes:
+        scene_lines = measure(scene, args.repeats)
+        print("\n".join(scene_lines), flush=True)
+        lines += scene_lines
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench_pilot_rate.txt").write_text("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
