@@ -14,11 +14,21 @@ rendered for its compositing, the fallback where the library cannot be loaded) w
 Cycles sync the rendering scene again at its next render: a whole octree build on
 heterogeneous fog, in the middle of a guided render or between an animation's frames.
 
-Prefilter "Fast": the albedo and normal guides are taken as they are rather than denoised
-first (OIDN's cleanAux off: it denoises them along with the image). Measured on the road at 512x288 from 4 samples, against a denoised 64-sample
+Prefilter "Fast" (every mode's, and the converged reference's): the albedo and normal guides
+are taken as they are rather than denoised first (OIDN's cleanAux off: it denoises them along
+with the image). Measured on the road at 512x288 from 4 samples, against a denoised 64-sample
 frame: Fast 0.25 s for mean FLIP 0.042, Accurate (Cycles' default) 1.6 s for 0.038, no
-guides 0.25 s for 0.042 but softer edges on textured surfaces. A second and a half per
-frame would weigh on every selective render's speedup.
+guides 0.25 s for 0.042 but softer edges on textured surfaces.
+
+``prefilter_guides`` (``--estimator auto``'s choice, so guided's and the panel's recommended
+mode's): in fog Cycles writes the guides at the first scattering event, so they are as noisy
+as the image, and that noise, correlated with the image's, is what OIDN then keeps as detail.
+Denoised first (quality Balanced: the same result as High on three of the four example
+scenes, for 40-60 % of its time), they lower mean FLIP at equal samples by 2-27 % (16 spp,
+medians of 3 seeds: road 0.0400 -> 0.0392, balls_a 0.0375 -> 0.0274, balls_b 0.0504 ->
+0.0473, statue 0.0442 -> 0.0409; 32 spp: 2-8 %) for 0.3-0.45 s at 256x192 and 1.1 s at
+512x288 on 2 cores (``bench/bench_denoise_guides.py``). Guides from a surface-only render, or
+none, helped some scenes and hurt road (README, "Denoising guides in fog").
 """
 from __future__ import annotations
 
@@ -28,11 +38,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .oidn_library import QUALITY_HIGH
+from .oidn_library import QUALITY_BALANCED, QUALITY_HIGH
 from .oidn_library import load as load_oidn
 from .render import read_exr_parts
 
 _SCENE = "xsl_render denoise"
+#: What prefiltered guides cost over the plain denoise, as a multiple of it (measured: 4x at
+#: 256x192 and 512x288, the prefilter's two filters at Balanced beside the main one at High).
+PREFILTER_COST = 4.0
 #: The denoising procedure's version: part of the converged reference's cache key
 #: (``core.validation.reference``). Bump it with any change to what ``denoise`` does
 #: (settings, prefilter, guides), then regenerate the shipped reference
@@ -61,21 +74,28 @@ def _set_input(node, name: str, value) -> None:
 
 
 def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
-            normal: np.ndarray | None = None) -> np.ndarray:
-    """The frame denoised by OIDN (HDR, albedo and normal prefiltered when given).
+            normal: np.ndarray | None = None, prefilter_guides: bool = False) -> np.ndarray:
+    """The frame denoised by OIDN (HDR, guided by albedo and normal when given).
 
     ``rgba`` is (H, W, 4) scene-linear; alpha passes through unchanged. Returns float32
-    (H, W, 4).
+    (H, W, 4). ``prefilter_guides``: the guides are denoised first, each by OIDN's filter on
+    its own at quality Balanced, and then taken as clean (OIDN's and Blender's "Accurate"
+    prefilter; auto's choice, see ``PREFILTER_COST``).
     """
     library = load_oidn()
     if library is not None:
         # Rows bottom first, as the compositor hands Blender's images to OIDN: its network is
         # not symmetric under a flip, and this is what makes the two bit-identical.
-        out = library.denoise(rgba[::-1], None if albedo is None else albedo[::-1],
-                              None if normal is None else normal[::-1],
-                              hdr=True, clean_aux=False, quality=QUALITY_HIGH)[::-1]
+        albedo = None if albedo is None else albedo[::-1]
+        normal = None if normal is None else normal[::-1]
+        clean = prefilter_guides and albedo is not None
+        if clean:
+            albedo = library.prefilter(albedo, "albedo", QUALITY_BALANCED)
+            normal = None if normal is None else library.prefilter(normal, "normal", QUALITY_BALANCED)
+        out = library.denoise(rgba[::-1], albedo, normal, hdr=True, clean_aux=clean,
+                              quality=QUALITY_HIGH)[::-1]
     else:
-        out = _compositor_denoise(rgba, albedo, normal)
+        out = _compositor_denoise(rgba, albedo, normal, "Accurate" if prefilter_guides else "Fast")
     denoised = np.empty_like(rgba, dtype=np.float32)
     denoised[..., :3] = np.maximum(out, 0.0)       # OIDN may undershoot slightly below zero
     denoised[..., 3:] = rgba[..., 3:]
@@ -83,9 +103,9 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
 
 
 def _compositor_denoise(rgba: np.ndarray, albedo: np.ndarray | None,
-                        normal: np.ndarray | None) -> np.ndarray:
+                        normal: np.ndarray | None, prefilter: str = "Fast") -> np.ndarray:
     """The denoised RGB (H, W, 3) through the compositor's Denoise node in a temporary scene
-    (Prefilter Fast, Quality High, HDR)."""
+    (Prefilter ``prefilter``, Quality High, HDR)."""
     import bpy
 
     height, width = rgba.shape[:2]
@@ -117,12 +137,12 @@ def _compositor_denoise(rgba: np.ndarray, albedo: np.ndarray | None,
             output = tree.nodes.new("CompositorNodeComposite")
         denoiser = tree.nodes.new("CompositorNodeDenoise")
         _set_input(denoiser, "HDR", True)
-        _set_input(denoiser, "Prefilter", "Fast")
+        _set_input(denoiser, "Prefilter", prefilter)
         _set_input(denoiser, "Quality", "High")
         if hasattr(denoiser, "use_hdr"):
             denoiser.use_hdr = True
         if hasattr(denoiser, "prefilter"):
-            denoiser.prefilter = "FAST"
+            denoiser.prefilter = prefilter.upper()
         for socket, pixels, non_color in (("Image", rgba, False), ("Albedo", albedo, False),
                                           ("Normal", normal, True)):
             if pixels is None:

@@ -24,7 +24,7 @@ import numpy as np
 #: OIDNDeviceType, OIDNFormat and OIDNQuality values of OIDN 2's C header.
 DEVICE_CPU = 1
 FORMAT_FLOAT3 = 3
-QUALITY_HIGH = 6
+QUALITY_FAST, QUALITY_BALANCED, QUALITY_HIGH = 4, 5, 6
 _NAMES = {"linux": ("libOpenImageDenoise.so.2", "libOpenImageDenoise.so"),
           "darwin": ("libOpenImageDenoise.2.dylib", "libOpenImageDenoise.dylib"),
           "win32": ("OpenImageDenoise.dll",)}
@@ -77,13 +77,26 @@ class OIDN:
     def denoise(self, color: np.ndarray, albedo: np.ndarray | None, normal: np.ndarray | None,
                 hdr: bool = True, clean_aux: bool = True, quality: int = QUALITY_HIGH) -> np.ndarray:
         """The RT filter on (H, W, 3) float32 images; returns the denoised (H, W, 3)."""
-        lib = self.lib
-        height, width = color.shape[:2]
-        images = {"color": np.ascontiguousarray(color[..., :3], np.float32)}
+        images = {"color": color}
         if albedo is not None:
-            images["albedo"] = np.ascontiguousarray(albedo[..., :3], np.float32)
+            images["albedo"] = albedo
             if normal is not None:
-                images["normal"] = np.ascontiguousarray(normal[..., :3], np.float32)
+                images["normal"] = normal
+        flags = {"hdr": hdr} | ({"cleanAux": clean_aux} if albedo is not None else {})
+        return self._filter(images, flags, quality)
+
+    def prefilter(self, guide: np.ndarray, kind: str, quality: int = QUALITY_HIGH) -> np.ndarray:
+        """A denoising guide (``kind`` "albedo" or "normal", (H, W, 3)) denoised by the RT
+        filter on its own, as OIDN's documentation prefilters noisy guides (then passed to
+        ``denoise`` with ``clean_aux``)."""
+        if kind not in ("albedo", "normal"):
+            raise ValueError(f"a guide is 'albedo' or 'normal' (got {kind!r})")
+        return self._filter({kind: guide}, {}, quality)
+
+    def _filter(self, inputs: dict[str, np.ndarray], flags: dict[str, bool], quality: int) -> np.ndarray:
+        lib = self.lib
+        height, width = next(iter(inputs.values())).shape[:2]
+        images = {name: np.ascontiguousarray(pixels[..., :3], np.float32) for name, pixels in inputs.items()}
         images["output"] = np.zeros((height, width, 3), np.float32)
         device = lib.oidnNewDevice(DEVICE_CPU)
         if not device:
@@ -96,9 +109,8 @@ class OIDN:
                 for name, pixels in images.items():
                     lib.oidnSetSharedFilterImage(filter_, name.encode(), pixels.ctypes.data, FORMAT_FLOAT3,
                                                  width, height, 0, 0, 0)
-                lib.oidnSetFilterBool(filter_, b"hdr", hdr)
-                if "albedo" in images:
-                    lib.oidnSetFilterBool(filter_, b"cleanAux", clean_aux)
+                for name, value in flags.items():
+                    lib.oidnSetFilterBool(filter_, name.encode(), value)
                 lib.oidnSetFilterInt(filter_, b"quality", quality)
                 lib.oidnCommitFilter(filter_)
                 self.check(device)

@@ -1,0 +1,170 @@
+"""Benchmark: which denoising guides leave OIDN the least error in fog?
+
+In fog Cycles writes its denoising albedo and normal at the first scattering event, so the
+guides are as noisy as the image, and with the same samples (their noise correlates with the
+image's, which OIDN then keeps as detail). Guides measured, at equal samples of the image:
+
+- ``as rendered``: every mode's denoise (``addon.cycles.denoise``, prefilter Fast);
+- ``prefiltered``: the guides denoised first, each by OIDN on its own, then taken as clean
+  (OIDN's and Blender's "Accurate"), at quality Balanced (auto's) and High;
+- ``another seed's``: the guides of a second render of the same samples with another seed
+  (uncorrelated noise; a whole render's cost, so a bound, not an offer);
+- ``surface-only, N spp``: the guides of a render with the media taken out (the world's
+  volume unlinked, volume objects and volume-only meshes hidden): nearly noise-free and cheap
+  (no octree, no media), but they show the surfaces behind the fog at full contrast;
+- ``none``.
+
+Each scene is rendered at ``bench_estimator.SIZES`` with auto's choice at 16 spp as the
+estimator tables report it (ray marching at the scene's rate on road and balls_a, 0.5 on
+balls_b, 4 on statue; blue noise), at ``--spp``, seeds 0 .. repeats - 1, and compared with
+the converged reference (the cached one ``bench_estimator.py`` uses). Prints medians over
+the seeds, the denoise's seconds and the guide renders'.
+
+    .venv/bin/python bench/bench_denoise_guides.py --repeats 3 [--spp 32]
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_estimator import ROOT, SIZES, chosen_scenes, scene_arguments  # noqa: E402
+
+SCENES = ("road", "balls_a", "balls_b", "statue")
+#: Auto's step rate at 16 spp (None: the scene's own), from the estimator tables.
+AUTO_RATE = {"road": None, "balls_a": None, "balls_b": 0.5, "statue": 4.0}
+SPP = 16
+SURFACE_SPP = (1, 4)
+
+
+def _hide_media(scene) -> None:
+    """Take the media out of ``scene``: the world's volume unlinked, volume objects and meshes
+    whose every material is volume-only hidden from the render."""
+    world = scene.world
+    if world is not None and world.node_tree is not None:
+        for link in list(world.node_tree.links):
+            if link.to_socket.name == "Volume":
+                world.node_tree.links.remove(link)
+    for obj in scene.objects:
+        if obj.type == "VOLUME":
+            obj.hide_render = True
+        elif obj.type == "MESH" and obj.material_slots:
+            surfaces = [node.inputs["Surface"].is_linked
+                        for slot in obj.material_slots if slot.material and slot.material.node_tree
+                        for node in slot.material.node_tree.nodes if node.type == "OUTPUT_MATERIAL"]
+            if surfaces and not any(surfaces):
+                obj.hide_render = True
+
+
+def _errors(reference, image) -> dict:
+    from xsl_render.core.validation.image_pair import ImagePair, as_rgb
+    from xsl_render.core.validation.metrics import compare_images
+
+    results = compare_images(ImagePair(as_rgb(reference), as_rgb(image[..., :3]), True), vdp=False)
+    return {"flip": results["flip"].extra["mean_flip"], "p95": results["flip"].extra["tile95_flip"],
+            "mse": results["mse"].extra.get("mse", results["mse"].average_error_percent)}
+
+
+def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
+    import bpy
+
+    import numpy as np
+
+    from xsl_render.addon.cycles.denoise import denoise
+    from xsl_render.addon.cycles.oidn_library import QUALITY_HIGH
+    from xsl_render.addon.cycles.oidn_library import load as load_oidn
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+    from xsl_render.addon.validation.reference import reference_inputs
+    from xsl_render.core.validation.reference import find_reference, read_reference
+
+    blend = ROOT / "example_blends" / f"{scene_name}.blend"
+    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    scene = bpy.context.scene
+    width, height = SIZES[scene_name]
+    # The reference the estimator benches render and cache (ceiling 64: 1024 spp, seed 7).
+    cached = find_reference(reference_inputs(scene, blend, max_spp=64, resolution=(width, height)).key)
+    if cached is None:
+        raise SystemExit(f"bench_denoise_guides: no cached reference of {scene_name}; "
+                         f"run bench/bench_estimator.py --scenes {scene_name} first")
+    reference = read_reference(cached.path, (width, height)).image
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.cycles.volume_biased = True
+    if AUTO_RATE[scene_name] is not None:
+        scene.cycles.volume_step_rate = AUTO_RATE[scene_name]
+    scene.cycles.sampling_pattern = "AUTOMATIC"
+
+    renders = []
+    for seed in range(repeats + 1):           # one more: the last seed's guides are "other seed"'s
+        with CyclesWindowRenderer(scene, seed, guides=True) as renderer:
+            renders.append(renderer.render(None, spp_count))
+    _hide_media(scene)
+    surface, surface_s = {}, {}
+    for spp in SURFACE_SPP:
+        with CyclesWindowRenderer(scene, 7, guides=True) as renderer:
+            began = time.perf_counter()
+            surface[spp] = renderer.render(None, spp).guides
+            surface_s[spp] = time.perf_counter() - began
+
+    library = load_oidn()
+
+    def prefiltered_high(k: int) -> np.ndarray:
+        """The render's own guides denoised first at quality High (auto's use Balanced)."""
+        guides = renders[k].guides[::-1]
+        albedo = library.prefilter(guides[..., :3], "albedo", QUALITY_HIGH)
+        normal = library.prefilter(guides[..., 3:6], "normal", QUALITY_HIGH)
+        out = library.denoise(renders[k].pixels[::-1], albedo, normal, hdr=True, clean_aux=True,
+                              quality=QUALITY_HIGH)[::-1]
+        return np.concatenate([np.maximum(out, 0.0), renders[k].pixels[..., 3:]], axis=2)
+
+    def with_guides(guides_of, prefilter: bool = False):
+        def run(k: int) -> np.ndarray:
+            guides = guides_of(k)
+            return denoise(renders[k].pixels, guides[..., :3], guides[..., 3:6], prefilter_guides=prefilter)
+        return run
+
+    variants = {"as rendered (every mode)": with_guides(lambda k: renders[k].guides),
+                "prefiltered, Balanced (auto)": with_guides(lambda k: renders[k].guides, prefilter=True),
+                "prefiltered, High": prefiltered_high,
+                "another seed's": with_guides(lambda k: renders[k + 1].guides),
+                **{f"surface-only, {spp} spp": with_guides(lambda k, spp=spp: surface[spp]) for spp in SURFACE_SPP},
+                "none": lambda k: denoise(renders[k].pixels)}
+    lines = [f"\n{scene_name} ({width}x{height}, {spp_count} spp, seeds 0-{repeats - 1}; surface guide renders "
+             + ", ".join(f"{spp} spp {surface_s[spp]:.2f} s" for spp in SURFACE_SPP)
+             + f" with their scene sync; a {spp_count}-spp render {renders[0].seconds:.2f} s)",
+             f"{'guides':28s} {'FLIP':>7s} {'p95tile':>7s} {'MSE':>9s} {'den s':>5s}  (medians; FLIP per seed)"]
+    for label, denoised in variants.items():
+        rows, seconds = [], []
+        for k in range(repeats):
+            began = time.perf_counter()
+            image = denoised(k)
+            seconds.append(time.perf_counter() - began)
+            rows.append(_errors(reference, image))
+        med = {key: statistics.median(row[key] for row in rows) for key in rows[0]}
+        lines.append(f"{label:28s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e} "
+                     f"{statistics.median(seconds):5.2f}  "
+                     + " ".join(f"{row['flip']:.4f}" for row in rows))
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = scene_arguments(__doc__, "bench-guides", SCENES)
+    parser.add_argument("--spp", type=int, default=SPP, help=f"samples per pixel (default {SPP})")
+    args = parser.parse_args(argv)
+    scenes = chosen_scenes(args, SCENES, "bench_denoise_guides")
+    if scenes is None:
+        return 2
+    lines = [f"bench_denoise_guides: {', '.join(scenes)}"]
+    for scene in scenes:
+        scene_lines = measure(scene, args.repeats, args.spp)
+        print("\n".join(scene_lines), flush=True)
+        lines += scene_lines
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "bench_denoise_guides.txt").write_text("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
