@@ -66,6 +66,7 @@ from ...core.tonemap import standard_view
 from ..scene.state import preserved_scene
 from .selective_render import (RenderOutcome, apply_estimator, finish_image, prepare_render, render_stats,
                                tile_entry)
+from .denoise import PREFILTER_COST
 from .tile_render import CyclesWindowRenderer
 
 #: Pixels of the scene-sync render (as the equal-time baselines do it).
@@ -75,7 +76,8 @@ _SYNC_WINDOW = 8
 _RENDER_OVERHEAD_S = 0.008
 #: The final denoise is guessed from the frame's pixels (road: 0.25 s for 147456 pixels on
 #: 2 cores), or, when that says more (small frames, a loaded machine), from the pilot's:
-#: measured at 128x72, the full frame's took 3-3.5x its quarter-resolution pilot's.
+#: measured at 128x72, the full frame's took 3-3.5x its quarter-resolution pilot's. Auto's
+#: prefiltered guides cost ``PREFILTER_COST`` times the plain denoise.
 _DENOISE_SECONDS_PER_PIXEL = 1.7e-6
 _DENOISE_RATIO = 3.5
 #: The pilot's sample cap and resolution divisor: 4 spp at a quarter of the resolution scored
@@ -196,6 +198,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             return piece.seconds - piece.sync_seconds
 
         reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
+        if options.volume_estimator().prefilter_guides:
+            reserve *= PREFILTER_COST
         reduce = 1 if whole_start else pilot_reduce(width, height)
 
         def sync(renderer) -> None:

@@ -144,11 +144,16 @@ def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOp
     """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase."""
     if not options.denoise:
         return image
+    from ...core.sampling.denoise_guides import guides_are_noisy
     from .denoise import denoise
 
     started = time.perf_counter()
+    # Auto denoises the guides first where most of the frame's are noisy (in fog they are
+    # written at the first scattering event): ``core.sampling.denoise_guides``.
+    prefilter = (guides is not None and options.volume_estimator().prefilter_guides
+                 and guides_are_noisy(guides[..., :3]))
     out = denoise(image, None if guides is None else guides[..., :3],
-                  None if guides is None else guides[..., 3:6])
+                  None if guides is None else guides[..., 3:6], prefilter_guides=prefilter)
     phases["denoise"] = time.perf_counter() - started
     return out
 

@@ -134,9 +134,17 @@ class EstimatorChoice:
     remeasure: Callable | None = field(default=None, repr=False, compare=False)
     sample_pattern: str | None = None
 
+    @property
+    def prefilter_guides(self) -> bool:
+        """Auto denoises with its guides prefiltered where they are noisy
+        (``core.sampling.denoise_guides``, ``addon.cycles.denoise``): a choice of how the
+        medium's noise is taken away, as the step is of how it is sampled."""
+        return self.estimator == "auto"
+
     def to_dict(self) -> dict:
         data = asdict(replace(self, remeasure=None))
         del data["remeasure"]
+        data["prefilter_guides"] = self.prefilter_guides
         if self.tried is not None:
             data["tried"] = {f"{rate:g}": value for rate, value in self.tried.items()}
         return data
@@ -144,6 +152,7 @@ class EstimatorChoice:
     def describe(self) -> str:
         pattern = "" if self.sample_pattern is None else \
             f"; sample pattern {self.sample_pattern} (Blender 5's blue noise, not the file's legacy one)"
+        pattern += "; denoising guides prefiltered where noisy" if self.prefilter_guides else ""
         if self.biased is None:
             return "the scene's own volume settings" + pattern
         if not self.biased:

@@ -195,11 +195,11 @@ def _tiles(args) -> int:
     return 0
 
 
-def _blender_denoiser(rgba, albedo, normal):
+def _blender_denoiser(rgba, albedo, normal, prefilter_guides):
     """Blender's Open Image Denoise, loaded only when a frame is to be denoised."""
     from ...addon.cycles.denoise import denoise
 
-    return denoise(rgba, albedo, normal)
+    return denoise(rgba, albedo, normal, prefilter_guides=prefilter_guides)
 
 
 def _composite(args) -> int:
