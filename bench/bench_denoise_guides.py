@@ -58,6 +58,35 @@ def _hide_media(scene) -> None:
                 obj.hide_render = True
 
 
+def open_with_auto_choice(scene_name: str):
+    """The example scene opened at its bench size with auto's choice at 16 spp set by hand
+    (``AUTO_RATE``, blue noise); (scene, blend path)."""
+    import bpy
+
+    blend = ROOT / "example_blends" / f"{scene_name}.blend"
+    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = SIZES[scene_name]
+    scene.render.resolution_percentage = 100
+    scene.cycles.volume_biased = True
+    if AUTO_RATE[scene_name] is not None:
+        scene.cycles.volume_step_rate = AUTO_RATE[scene_name]
+    scene.cycles.sampling_pattern = "AUTOMATIC"
+    return scene, blend
+
+
+def run_scenes(bench: str, scenes: list[str], out: Path, measure) -> int:
+    """``measure(scene)`` for each scene, printed as it comes and written to out/<bench>.txt."""
+    lines = [f"{bench}: {', '.join(scenes)}"]
+    for scene in scenes:
+        scene_lines = measure(scene)
+        print("\n".join(scene_lines), flush=True)
+        lines += scene_lines
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{bench}.txt").write_text("\n".join(lines) + "\n")
+    return 0
+
+
 def _errors(reference, image) -> dict:
     from xsl_render.core.validation.image_pair import ImagePair, as_rgb
     from xsl_render.core.validation.metrics import compare_images
@@ -68,8 +97,6 @@ def _errors(reference, image) -> dict:
 
 
 def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
-    import bpy
-
     import numpy as np
 
     from xsl_render.addon.cycles.denoise import denoise
@@ -79,9 +106,7 @@ def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
     from xsl_render.addon.validation.reference import reference_inputs
     from xsl_render.core.validation.reference import find_reference, read_reference
 
-    blend = ROOT / "example_blends" / f"{scene_name}.blend"
-    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
-    scene = bpy.context.scene
+    scene, blend = open_with_auto_choice(scene_name)
     width, height = SIZES[scene_name]
     # The reference the estimator benches render and cache (ceiling 64: 1024 spp, seed 7).
     cached = find_reference(reference_inputs(scene, blend, max_spp=64, resolution=(width, height)).key)
@@ -89,12 +114,6 @@ def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
         raise SystemExit(f"bench_denoise_guides: no cached reference of {scene_name}; "
                          f"run bench/bench_estimator.py --scenes {scene_name} first")
     reference = read_reference(cached.path, (width, height)).image
-    scene.render.resolution_x, scene.render.resolution_y = width, height
-    scene.render.resolution_percentage = 100
-    scene.cycles.volume_biased = True
-    if AUTO_RATE[scene_name] is not None:
-        scene.cycles.volume_step_rate = AUTO_RATE[scene_name]
-    scene.cycles.sampling_pattern = "AUTOMATIC"
 
     renders = []
     for seed in range(repeats + 1):           # one more: the last seed's guides are "other seed"'s
@@ -156,14 +175,8 @@ def main(argv=None) -> int:
     scenes = chosen_scenes(args, SCENES, "bench_denoise_guides")
     if scenes is None:
         return 2
-    lines = [f"bench_denoise_guides: {', '.join(scenes)}"]
-    for scene in scenes:
-        scene_lines = measure(scene, args.repeats, args.spp)
-        print("\n".join(scene_lines), flush=True)
-        lines += scene_lines
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "bench_denoise_guides.txt").write_text("\n".join(lines) + "\n")
-    return 0
+    return run_scenes("bench_denoise_guides", scenes, args.out,
+                      lambda scene: measure(scene, args.repeats, args.spp))
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ at 16 spp, and prints each estimate's ratio to what the full frame paid per pixe
 
 The full frame's own seconds are printed too: their spread from seed to seed is the floor
 under any pilot. Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
-(``bench_denoise_guides.AUTO_RATE``) and blue noise.
+(``bench_denoise_guides.open_with_auto_choice``) and blue noise.
 
     .venv/bin/python bench/bench_pilot_rate.py --repeats 4
 """
@@ -24,8 +24,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_denoise_guides import AUTO_RATE  # noqa: E402
-from bench_estimator import ROOT, SIZES, chosen_scenes, scene_arguments  # noqa: E402
+from bench_denoise_guides import open_with_auto_choice, run_scenes  # noqa: E402
+from bench_estimator import SIZES, chosen_scenes, scene_arguments  # noqa: E402
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
 SPP = 16
@@ -33,20 +33,11 @@ REDUCTIONS = (4, 2)
 
 
 def measure(scene_name: str, repeats: int) -> list[str]:
-    import bpy
-
     from xsl_render.addon.cycles.guided_render import _RENDER_OVERHEAD_S
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
 
-    bpy.ops.wm.open_mainfile(filepath=str(ROOT / "example_blends" / f"{scene_name}.blend"), load_ui=False)
-    scene = bpy.context.scene
+    scene, _ = open_with_auto_choice(scene_name)
     width, height = SIZES[scene_name]
-    scene.render.resolution_x, scene.render.resolution_y = width, height
-    scene.render.resolution_percentage = 100
-    scene.cycles.volume_biased = True
-    if AUTO_RATE[scene_name] is not None:
-        scene.cycles.volume_step_rate = AUTO_RATE[scene_name]
-    scene.cycles.sampling_pattern = "AUTOMATIC"
 
     def timed(renderer, *args, **kwargs) -> float:
         began = time.perf_counter()
@@ -87,14 +78,7 @@ def main(argv=None) -> int:
     scenes = chosen_scenes(args, SCENES, "bench_pilot_rate")
     if scenes is None:
         return 2
-    lines = [f"bench_pilot_rate: {', '.join(scenes)}, {args.repeats} seeds"]
-    for scene in scenes:
-        scene_lines = measure(scene, args.repeats)
-        print("\n".join(scene_lines), flush=True)
-        lines += scene_lines
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "bench_pilot_rate.txt").write_text("\n".join(lines) + "\n")
-    return 0
+    return run_scenes("bench_pilot_rate", scenes, args.out, lambda scene: measure(scene, args.repeats))
 
 
 if __name__ == "__main__":
