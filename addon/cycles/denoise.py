@@ -23,8 +23,9 @@ guides 0.25 s for 0.042 but softer edges on textured surfaces.
 ``prefilter_guides`` (``--estimator auto``'s choice, so guided's and the panel's recommended
 mode's): in fog Cycles writes the guides at the first scattering event, so they are as noisy
 as the image, and that noise, correlated with the image's, is what OIDN then keeps as detail.
-Denoised first (quality Balanced: the same result as High on three of the four example
-scenes, for 40-60 % of its time), they lower mean FLIP at equal samples by 2-27 % (16 spp,
+Denoised first (quality Balanced: as good as High or better on balls_a and statue, within
+1-2 % of it on road and balls_b, for 40-60 % of its time), they lower mean FLIP at equal
+samples by 2-27 % (16 spp,
 medians of 3 seeds: road 0.0400 -> 0.0392, balls_a 0.0375 -> 0.0274, balls_b 0.0504 ->
 0.0473, statue 0.0442 -> 0.0409; 32 spp: 2-8 %) for 0.3-0.45 s at 256x192 and 1.1 s at
 512x288 on 2 cores (``bench/bench_denoise_guides.py``). Guides from a surface-only render, or
