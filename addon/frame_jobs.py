@@ -20,7 +20,8 @@ from typing import Callable, Sequence
 from ..core.maps.files import MapSet
 from ..core.maps.options import MapOptions
 from ..core.progress import Steps, scaled_steps, timed_steps
-from ..core.sampling.guided_plan import GuidedOptions, SequenceBudget
+from ..core.sampling.guided_plan import GuidedOptions
+from ..core.sampling.sequence_budget import SequenceBudget
 from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.render_stats import FrameMaps
 from .cycles.guided_render import guided_steps

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.progress import ProgressCallback
-from ..core.sampling.guided_plan import SequenceBudget
+from ..core.sampling.sequence_budget import SequenceBudget
 from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.render_request import RenderRequest
 from .cycles import selective_render as sr

@@ -81,7 +81,7 @@ def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
     budget (its importance map computed first, inside the budget; every frame of an
     animation gets its own budget)."""
     from ..addon.render_dispatch import request_frame_job
-    from ..core.sampling.guided_plan import SequenceBudget
+    from ..core.sampling.sequence_budget import SequenceBudget
     from ..core.sampling.render_request import RenderRequest
 
     settings = scene.xsl_render

@@ -200,3 +200,14 @@ def test_the_first_frame_of_a_guided_range_renders_whole(cli, tmp_path):
     # sample of street at 1.4-1.8x its cost), of 1 and 4 samples.
     assert frames[0]["pilot_resolution_divisor"] == 1 and frames[0]["pilot_spp"] >= 4
     assert frames[0]["pilot_seconds"] > 0
+    # Auto's denoise: street's guides at this size are noise (0.07-0.15 against 0.001); each
+    # frame records what it decided, and a later frame sets aside what the frames before
+    # measured the same denoise to cost (not a guess from the pixel count).
+    assert all(frame["denoise_guides"]["noisy"] for frame in frames)
+    carried = 0
+    for before, after in zip(frames, frames[1:]):
+        key = "denoise_prefiltered_s" if after["denoise_guides"]["prefiltered"] else "denoise_plain_s"
+        if before["sequence_budget"][key] is not None:
+            assert after["denoise_reserved_s"] == pytest.approx(before["sequence_budget"][key])
+            carried += 1
+    assert carried and frames[-1]["sequence_budget"]["guides_noisy"] is True

@@ -2,6 +2,8 @@
 the time budget is kept, the ceiling obeyed, the scene restored."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from support.fog_scene import build_fog_scene
@@ -9,7 +11,8 @@ from support.fog_scene import build_fog_scene
 from xsl_render.addon.cycles.guided_render import render_guided
 from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
 from xsl_render.addon.scene.state import preserved_scene, settings_dump
-from xsl_render.core.sampling.guided_plan import POWER_OF_TWO_SLACK, GuidedOptions
+from xsl_render.core.sampling.guided_plan import GuidedOptions
+from xsl_render.core.sampling.sample_counts import POWER_OF_TWO_SLACK
 from xsl_render.core.sampling.pass_merge import PassAccumulator
 from xsl_render.core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
@@ -125,3 +128,27 @@ def test_guided_render_syncs_heterogeneous_fog_once(blender):
         assert final and outcome.stats.phases_s["sync"] > 0.3 * first_sync
         assert outcome.stats.cycles_sync_s < 1.5 * cycles_sync, (exponent, outcome.stats.cycles_sync_s)
         assert max(final) < 0.3 * outcome.stats.phases_s["sync"], (final, outcome.stats.phases_s)
+
+
+@pytest.mark.parametrize("scene_file, noisy", [("road.blend", False), ("balls_b.blend", True)])
+def test_a_still_sets_the_prefilters_time_aside_only_where_its_pilots_guides_are_noisy(cli, tmp_path, scene_file,
+                                                                                       noisy):
+    """Auto prefilters the denoising guides where they are noisy (noise fog: balls_b), not
+    where they are exact (road's world fog leaves every pixel's guide at its surface), and a
+    still's budget keeps the prefilter's time only where its pilot's guides say it will be
+    spent: on road at uniform 32 spp's time that time was 0.75 s of samples. (A ceiling of 16
+    makes both reserves afford the same count, so the prefilter never costs a power of two.)"""
+    from conftest import EXAMPLES
+
+    from xsl_render.addon.cycles.denoise import PREFILTER_COST
+    from xsl_render.addon.cycles.guided_render import _DENOISE_SECONDS_PER_PIXEL
+
+    out = tmp_path / "still.exr"
+    done = cli("render", EXAMPLES / scene_file, "--mode", "guided", "--time-budget", "1.5", "--max-spp", "16",
+               "--resolution", f"{W}x{H}", "--estimator", "auto", "--quiet", "--out", out,
+               "--stats", tmp_path / "stats.json")
+    assert done.returncode == 0, done.stderr
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["denoise_guides"]["noisy"] is noisy and stats["denoise_guides"]["prefiltered"] is noisy
+    plain = _DENOISE_SECONDS_PER_PIXEL * W * H
+    assert stats["denoise_reserved_s"] == pytest.approx(PREFILTER_COST * plain if noisy else plain)

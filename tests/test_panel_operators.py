@@ -12,7 +12,7 @@ from support.fog_scene import build_fog_scene
 from support.ui_stub import draw
 
 from xsl_render.core.panel.settings import PRESETS, SETTING_NAMES, builtin_defaults, map_options
-from xsl_render.core.sampling.guided_plan import POWER_OF_TWO_SLACK
+from xsl_render.core.sampling.sample_counts import POWER_OF_TWO_SLACK
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 

@@ -44,6 +44,13 @@
    one render instead: with blue noise and null scattering, a later frame rendered after
    windows had other (worse) pixels than a fresh render at its count.
 6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
+   The time set aside for it is auto's prefiltered denoise only where the guides will be
+   noisy (the pilot's measured so, or the frame before's) and where the prefilter does not
+   take the frame below the power of two the plain denoise affords (``prefilter_pays``);
+   a later frame of a range sets aside what the frames before measured.
+
+A still's count may be raised to the power of two above it where ``BUDGET_OVERRUN`` of its
+budget reaches it (``still_count``), as a range's may.
 
 Every setting touched is put back (``preserved_scene``) after success, error or cancel.
 """
@@ -55,9 +62,12 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.progress import ProgressCallback, Steps, run_steps
-from ...core.sampling.guided_plan import (BudgetPacer, FinalPass, GuidedOptions, SequenceBudget,
-                                          column_count, error_scores, plan_final_pass, sobol_friendly,
-                                          tile_means)
+from ...core.sampling.guided_plan import (BudgetPacer, FinalPass, GuidedOptions, error_scores,
+                                          plan_final_pass, tile_means)
+from ...core.sampling.denoise_guides import guides_are_noisy
+from ...core.sampling.sample_counts import (BUDGET_OVERRUN, column_count, prefilter_pays, sobol_friendly,
+                                            still_count)
+from ...core.sampling.sequence_budget import SequenceBudget
 from ...core.sampling.pass_merge import PassAccumulator
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.tile_plan import Rect, check_director_map, tile_windows
@@ -151,7 +161,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                  pace: SequenceBudget | None = None) -> Steps[RenderOutcome]:
     """``render_guided`` as steps (``core.progress``); closing it restores the scene.
 
-    ``pace``: the frame is one of a range (``core.sampling.guided_plan.SequenceBudget``): its
+    ``pace``: the frame is one of a range (``core.sampling.sequence_budget.SequenceBudget``): its
     scene sync's seconds are added to its budget instead of taken from it (the range charges
     them to the frames after it, which find the scene synced); what its final pass cost per
     sample is told to ``pace`` for the next frame, which renders without a pilot."""
@@ -197,10 +207,32 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             tiles.append(tile_entry(window, piece) | {"pass": "final"})
             return piece.seconds - piece.sync_seconds
 
+        # The final denoise's time, set aside before the final pass: plain, or with auto's
+        # prefiltered guides where they are noisy and the prefilter does not cost the frame
+        # its power of two (``prefilter_pays``). A later frame of a range knows both from
+        # the frames before it.
         reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-        if options.volume_estimator().prefilter_guides:
-            reserve *= PREFILTER_COST
+        may_prefilter = options.denoise and options.volume_estimator().prefilter_guides
+        if pace is not None and pace.denoise_plain_s is not None:
+            reserve = pace.denoise_plain_s
+        prefilter_reserve = reserve * PREFILTER_COST
+        if pace is not None and pace.denoise_prefiltered_s is not None:
+            prefilter_reserve = pace.denoise_prefiltered_s
+        allow_prefilter = False
         reduce = 1 if whole_start else pilot_reduce(width, height)
+
+        def denoise_plan(count_for, noisy: bool) -> tuple[float, bool]:
+            """(seconds set aside for the final denoise, whether it may prefilter the guides);
+            ``count_for(seconds)`` is the count the frame renders with that set aside."""
+            if may_prefilter and noisy and prefilter_pays(count_for(reserve), count_for(prefilter_reserve)):
+                return prefilter_reserve, True
+            return reserve, False
+
+        def first_column_count(affordable: float, frame_sample_s: float) -> int:
+            """A still's count (its first column's): raised to the power of two above it where
+            ``BUDGET_OVERRUN`` of the budget reaches."""
+            return still_count(affordable, BUDGET_OVERRUN * guided.time_budget / frame_sample_s,
+                               options.max_spp)
 
         def sync(renderer) -> None:
             """A 1-sample render of a few pixels: Cycles syncs the scene."""
@@ -253,10 +285,15 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 sync(renderer)
                 rate, have, reduce, pilot_seconds = pace.rate, 0, 1, 0.0
                 phases["pilot"] = phases["scoring"] = 0.0
-                denoise_reserve = reserve
-                left = budget - clock.now() - denoise_reserve - _RENDER_OVERHEAD_S
-                spp = pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp,
-                                        rate * width * height)
+
+                def steady(denoise_s: float) -> int:
+                    left = budget - clock.now() - denoise_s - _RENDER_OVERHEAD_S
+                    return pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp,
+                                             rate * width * height)
+
+                # Noisy unless the frame before measured its guides clean.
+                denoise_reserve, allow_prefilter = denoise_plan(steady, pace.guides_noisy is not False)
+                spp = steady(denoise_reserve)
                 final = FinalPass([Rect(0, height, 0, width, spp)], np.full(len(windows), float(spp)), flat=True)
                 paused = clock.pause()
                 yield 0.2, f"guided: the frame at {spp} spp"
@@ -313,9 +350,22 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     # pay back, so that it renders the count they will hold (street at uniform
                     # 32 spp's time: its pilot left it 16 spp where they rendered 32).
                     budget += clock.now() - phases.get("sync", 0.0)
+                # The final denoise set aside: its guides will be noisy where the pilot's are not
+                # clean (fewer samples, so noisier than the frame's: road's scored 0.0000).
+                frame_sample_s = rate * width * height
+
+                def first_count(denoise_s: float) -> int:
+                    affordable = max(0.0, budget - clock.now() - denoise_s) / frame_sample_s
+                    if range_start:
+                        return pace.steady_count(affordable, options.max_spp, frame_sample_s)
+                    return first_column_count(affordable, frame_sample_s)
+
+                pilot_noisy = pilot.guides is not None and guides_are_noisy(pilot.guides[..., :3])
+                denoise_reserve, allow_prefilter = denoise_plan(first_count, pilot_noisy)
+                if options.denoise:
+                    denoise_reserve = max(denoise_reserve, _DENOISE_RATIO * scoring_denoise)
                 # The final pass: planned for the time left once the final denoise is set aside,
                 # then planned again with each of its renders' fixed cost set aside too.
-                denoise_reserve = max(reserve, _DENOISE_RATIO * scoring_denoise) if options.denoise else 0.0
                 left = budget - clock.now() - denoise_reserve
                 final = plan_final_pass(scores, weights, width, height, guided, max(0.0, left) / rate,
                                         options.tile_size, options.max_spp)
@@ -349,7 +399,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                         spp = pace.steady_count(spp, options.max_spp, rate * width * height)
                     elif final.flat:
                         # One count for the whole frame while the clock allows (``column_count``).
-                        spp = sobol_friendly(spp) if first_column is None else column_count(first_column, spp)
+                        spp = (first_column_count(spp, frame_sample_s) if first_column is None
+                               else column_count(first_column, spp))
                         first_column = first_column or spp
                     seconds = keep(rect.window, renderer.render(rect.window, spp), spp)
                     pacer.record(seconds, rate * spp * rect.area)
@@ -364,10 +415,14 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         merged, merged_guides = image.result(), guides.result()
         samples = image.samples.astype(np.float32)
         phases["composite"] = clock.now() - began
-        merged = finish_image(merged, merged_guides if options.denoise else None, options, phases)
+        merged, denoise_guides = finish_image(merged, merged_guides if options.denoise else None, options,
+                                              phases, allow_prefilter)
+        if pace is not None and denoise_guides is not None:
+            pace.observe_denoise(phases["denoise"], denoise_guides["prefiltered"], denoise_guides["noisy"])
         if used != options.volume_estimator():      # (a fixed choice is a new object each call)
             options = replace(options, estimator_choice=used)
-        stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings)
+        stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings,
+                             denoise_guides=denoise_guides)
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
     if sync_outside:

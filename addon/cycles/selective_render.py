@@ -89,7 +89,7 @@ def apply_estimator(scene, choice) -> None:
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
                  samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str],
-                 cycles_sync_s: float | None = None) -> RenderStats:
+                 cycles_sync_s: float | None = None, denoise_guides: dict | None = None) -> RenderStats:
     """What every mode records (``phases`` is kept, not copied: later phases add to it)."""
     total = float(samples.sum(dtype=np.float64))
     estimator = options.volume_estimator()
@@ -102,7 +102,7 @@ def render_stats(mode: str, scene, options: RenderOptions, width: int, height: i
         mean_spp=total / (width * height), gold_samples=width * height * options.max_spp,
         renders=len(tiles), tiles=tiles, options=options.to_dict(),
         estimator=estimator.to_dict() | {"described": estimator.describe()}, warnings=warnings,
-        cycles_sync_s=cycles_sync_s)
+        cycles_sync_s=cycles_sync_s, denoise_guides=denoise_guides)
 
 
 def tile_entry(window, rendered) -> dict:
@@ -140,22 +140,29 @@ def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptio
 
 
 def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
-                 phases: dict) -> np.ndarray:
-    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase."""
+                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None]:
+    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase;
+    and, where auto may prefilter the denoising guides, what it decided (their noise, whether
+    that is noisy, whether they were prefiltered: ``RenderStats.denoise_guides``), else None.
+    ``allow_prefilter`` False: the caller could not afford the prefilter (``guided``)."""
     if not options.denoise:
-        return image
-    from ...core.sampling.denoise_guides import guides_are_noisy
+        return image, None
+    from ...core.sampling.denoise_guides import NOISY_GUIDE_MEDIAN, guide_noise
     from .denoise import denoise
 
     started = time.perf_counter()
     # Auto denoises the guides first where most of the frame's are noisy (in fog they are
     # written at the first scattering event): ``core.sampling.denoise_guides``.
-    prefilter = (guides is not None and options.volume_estimator().prefilter_guides
-                 and guides_are_noisy(guides[..., :3]))
+    record = None
+    if guides is not None and options.volume_estimator().prefilter_guides:
+        noise = guide_noise(guides[..., :3])
+        noisy = noise > NOISY_GUIDE_MEDIAN
+        record = {"noise": noise, "noisy": noisy, "prefiltered": noisy and allow_prefilter}
     out = denoise(image, None if guides is None else guides[..., :3],
-                  None if guides is None else guides[..., 3:6], prefilter_guides=prefilter)
+                  None if guides is None else guides[..., 3:6],
+                  prefilter_guides=bool(record and record["prefiltered"]))
     phases["denoise"] = time.perf_counter() - started
-    return out
+    return out, record
 
 
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
@@ -217,9 +224,10 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
-        image = finish_image(image, None if guides is None else guides.result()[0], options, phases)
+        image, denoise_guides = finish_image(image, None if guides is None else guides.result()[0], options,
+                                             phases)
         stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings,
-                             renderer.sync_seconds)
+                             renderer.sync_seconds, denoise_guides)
     stats.plan, stats.ideal_speedup = plan.to_dict(), plan.ideal_speedup
     stats.director_map_mean = float(data.mean())
     return RenderOutcome(image, samples, stats, warnings)
@@ -259,11 +267,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
-        image = finish_image(rendered.pixels, rendered.guides, options, phases)
+        image, denoise_guides = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings,
-                             renderer.sync_seconds)
+                             renderer.sync_seconds, denoise_guides)
     stats.budget, stats.noise_threshold = budget, adaptive_threshold
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not

@@ -282,7 +282,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     todo = [frame for frame in frames if frame not in outcomes]
     if todo:
         from ...core.progress import run_steps, scaled_steps
-        from ...core.sampling.guided_plan import SequenceBudget
+        from ...core.sampling.sequence_budget import SequenceBudget
         from ...core.sampling.render_request import RenderRequest
         from ..frame_jobs import frames_steps
         from ..render_dispatch import request_frame_job

@@ -45,7 +45,8 @@ from typing import Callable, Sequence
 from ...core.errors import InputError
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback, run_steps
-from ...core.sampling.guided_plan import GuidedOptions, SequenceBudget
+from ...core.sampling.guided_plan import GuidedOptions
+from ...core.sampling.sequence_budget import SequenceBudget
 from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 from ...core.sampling.render_request import RenderRequest
 from ...core.validation.contestants import Contestant

@@ -43,7 +43,7 @@ Everything here is plain numbers; the clock is read by the caller.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -263,57 +263,6 @@ def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
     return out
 
 
-#: A whole-frame count this little above a power of two is rounded down to it (see
-#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``. Measured up to 48 samples. The
-#: budget is a ceiling: a run may end up to a third early, where the extra samples would
-#: have bought little (statue, road, balls_b) or made the frame worse (balls_a).
-POWER_OF_TWO_SLACK = 1.5
-POWER_OF_TWO_LARGEST = 32
-
-
-def sobol_friendly(count: int) -> int:
-    """``count`` samples per pixel, or the power of two below it when that is within
-    ``POWER_OF_TWO_SLACK``: Cycles' sample patterns stratify best at powers of two, and after
-    denoising the difference shows. Measured (uniform, auto's estimator, mean FLIP against
-    the converged reference, in ``docs/bench_sample_counts.txt``), with the legacy Tabulated
-    Sobol pattern (medians of 4 seeds, 2 for 22 and 36-48): balls_a 16 / 18 / 20 / 22 / 24
-    spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44 / 48 spp 0.0307 /
-    0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp 0.0454 / 0.0457 /
-    0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520 / 0.0503 /
-    0.0479. With the blue noise auto renders with (``sample_pattern``; means of 2 seeds):
-    balls_a 16 / 18 / 20 / 22 / 24 / 28 / 32 spp 0.0377 / 0.0476 / 0.0463 / 0.0421 / 0.0373 /
-    0.0383 / 0.0274; statue 16 / 20 / 22 / 24 / 32 spp 0.0445 / 0.0439 / 0.0421 / 0.0411 /
-    0.0378; balls_b 16 / 20 / 22 spp 0.0505 / 0.0491 / 0.0484; road 0.0400 / 0.0387 /
-    0.0377. So on balls_a every count from 17 to 31 is no better than 16, with blue noise
-    much worse at 18-22; elsewhere 20-23 samples buy 2-6 % of FLIP for 25-45 % more time,
-    about what the power of two's own curve gives, so rounding them down costs nothing in
-    equal-quality speed. Guided's three columns at mean counts of 35-37 spp measured FLIP
-    0.0308 on balls_a, where 32 in every column gave 0.0274 (``docs/bench_sample_pattern.txt``)."""
-    count = int(count)
-    if count < 2:
-        return max(count, 1)
-    power = 1 << (count.bit_length() - 1)
-    if power > POWER_OF_TWO_LARGEST:
-        return count
-    return power if count < POWER_OF_TWO_SLACK * power else count
-
-
-def column_count(first: int, affordable: int) -> int:
-    """The count of a flat pass's later column: the first column's while the column affords
-    from ``HOLD_RANGE[0]`` of it to less than twice it, else ``sobol_friendly(affordable)``.
-
-    One frame at one count: the pilot's timing is noisy at small budgets (a quarter-resolution
-    render of a few samples in ~0.07 s), and the columns paced after a misjudged first one
-    came out uneven, which scored worse than their mean count (balls_a at uniform 16 spp's
-    time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp, mean FLIP 0.0564 / 0.0445 /
-    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the first column's
-    count beyond what a column affords by the clock (the budget's 15 %) or leaves a column
-    short of twice it unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
-    if HOLD_RANGE[0] * first <= affordable < 2 * first:
-        return first
-    return sobol_friendly(affordable)
-
-
 class BudgetPacer:
     """Keeps a sequence of renders inside a time budget.
 
@@ -370,117 +319,3 @@ class BudgetPacer:
         # overstate the cost many times over (the timing noise of its short renders).
         cap = self.max_scale / self.cost_ratio if self.side_by_side else self.max_scale
         return float(min(cap, max(0.0, usable / (planned * self.cost_ratio))))
-
-
-#: A flat pass's later column keeps the first one's count from the low end of this range of
-#: it (``column_count``); a later frame of a guided range keeps the frame before's until it
-#: affords more than the high end (``SequenceBudget.steady_count``).
-HOLD_RANGE = (0.85, 1.3)
-#: A later frame prices a sample at what the last this many frames paid for theirs, all
-#: together: a frame's own cost moves with what the camera sees (street: 3.4-4.9 s for the
-#: same 16 spp), and a count priced by the frame before alone followed those moves
-#: (``steady_count`` then let go of the count 4 times in 24 frames).
-RATE_WINDOW = 4
-#: A guided range may end this share over its whole budget to render its frames at one count
-#: (``SequenceBudget.steady_count``): without it a held count that cost a little more than
-#: each frame's share left the last frames to pay back all of it, and they dropped (street,
-#: frames 1-8 at uniform 32 spp's time: 16, 32 x6, 16 spp, each change a flicker). Measured
-#: at 0.1 too; with the pricing error of 2-s frames that ran a 2-frame range 1.12x over.
-RANGE_OVERRUN = 0.05
-#: A held count is not raised in a range's last this many frames: a raise there buys samples
-#: for a few frames at the price of a change of noise that plays as flicker (street, 24
-#: frames at uniform 16 spp's time: 16 x22, then 32, 32 on what the held count had left
-#: unspent). A farm's chunk is a range, so every chunk would end on such a change.
-LAST_FRAMES_UNRAISED = 3
-#: A frame of a guided animation is never given less than this share of the per-frame budget,
-#: whatever the frames before it overran (a short sequence with a long first sync overruns
-#: its total instead of starving its frames).
-MIN_FRAME_SHARE = 0.5
-
-
-@dataclass
-class SequenceBudget:
-    """The time of a guided animation: ``per_frame`` seconds a frame, ``per_frame x frames``
-    for the whole range.
-
-    The first frame syncs the scene (seconds for heterogeneous fog: Blender 5 builds its
-    volume octree), the others find it synced (one Cycles session for the range). Charging
-    that sync to the first frame alone would leave it a pilot and hardly a sample; here a
-    frame renders for what the range has left divided by the frames still to render, its
-    sync outside that, so the first frame renders like the others and the rest pay its sync
-    back. (Mutable: one per run, ``record`` after each frame.)
-    """
-
-    per_frame: float
-    frames: int
-    spent: float = 0.0
-    done: int = 0
-    #: Seconds per full-resolution pixel-sample over the last ``RATE_WINDOW`` frames (their
-    #: final passes, scene sync left out), and the frame before's samples per pixel. None
-    #: before the first frame.
-    rate: float | None = None
-    spp: int | None = None
-    #: (seconds, pixel-samples) of those frames' final passes, oldest first.
-    recent: list = field(default_factory=list)
-
-    def next_budget(self) -> float:
-        """Seconds for the next frame, its scene sync not included."""
-        left = self.per_frame * self.frames - self.spent
-        remaining = max(1, self.frames - self.done)
-        return max(MIN_FRAME_SHARE * self.per_frame, left / remaining)
-
-    def record(self, seconds: float) -> None:
-        """A frame took ``seconds`` (wall, its sync included)."""
-        self.spent += float(seconds)
-        self.done += 1
-
-    def observe(self, seconds: float, samples: float, spp: int) -> None:
-        """A frame's final pass took ``seconds`` for ``samples`` pixel-samples, ``spp`` per
-        pixel (a pass that measured nothing is left out)."""
-        if seconds > 0.0 and samples > 0:
-            self.recent = (self.recent + [(float(seconds), float(samples))])[-RATE_WINDOW:]
-            self.rate = sum(s for s, _ in self.recent) / sum(n for _, n in self.recent)
-            self.spp = int(spp)
-
-    def allowance(self, frame_sample_seconds: float) -> float:
-        """Samples per pixel a frame may render beyond its share: the frames left share
-        ``RANGE_OVERRUN`` of the range's budget (one sample per pixel of the whole frame
-        costing ``frame_sample_seconds``)."""
-        if frame_sample_seconds <= 0.0:
-            return 0.0
-        return RANGE_OVERRUN * self.per_frame * self.frames / max(1, self.frames - self.done) / frame_sample_seconds
-
-    def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
-        """The samples per pixel of a frame of the range that can afford ``affordable`` (its
-        share of what the range has left), one sample per pixel of the whole frame costing
-        ``frame_sample_seconds``: the frame before's count while the frames left can all
-        render it within ``RANGE_OVERRUN`` over the range's budget and this frame does not
-        afford more than ``HOLD_RANGE[1]`` times it (a count that changes from frame to frame
-        changes the noise, which shows as flicker), else a fresh count at one Cycles'
-        patterns like, within the frame's share (the first frame's, with no frame before);
-        either raised to the power of two above it where the allowance reaches it. In the
-        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is."""
-        reach = affordable + self.allowance(frame_sample_seconds)
-        closing = self.frames - self.done <= LAST_FRAMES_UNRAISED
-        if self.spp and self.spp <= reach and (closing or affordable <= HOLD_RANGE[1] * self.spp):
-            count = max(1, min(self.spp, ceiling))
-            return count if closing else self.up_to_power_of_two(count, reach, ceiling)
-        count = sobol_friendly(max(1, min(int(affordable), ceiling)))
-        return self.up_to_power_of_two(count, reach, ceiling)
-
-    @staticmethod
-    def up_to_power_of_two(count: int, reach: float, ceiling: int) -> int:
-        """The largest power of two within ``reach`` (and the ceiling) where that is above
-        ``count``, else ``count``. A power of two renders better than the count below it
-        beyond what the samples add (Blender 5's blue noise, street frame 1: 28 spp mean
-        FLIP 0.0690, 32 spp 0.0662; a guided range at 29 spp on every frame scored 0.0697)."""
-        top = int(min(reach, ceiling))
-        if top < 1:
-            return count
-        power = 1 << (top.bit_length() - 1)
-        return max(power, count)
-
-    def to_dict(self) -> dict:
-        data = asdict(self)
-        del data["recent"]
-        return data

@@ -48,6 +48,7 @@ class RenderStats:
     estimator: dict                       # the volume estimator used and why
     warnings: list[str] = field(default_factory=list)
     cycles_sync_s: float | None = None    # Cycles' scene sync inside the renders
+    denoise_guides: dict | None = None    # auto's guide prefilter: noise, noisy, prefiltered
     # xs, xsl
     plan: dict | None = None
     ideal_speedup: float | None = None

@@ -17,8 +17,8 @@ options) as it is.
 
 Blue noise is at its best at a power of two samples, as Tabulated Sobol is, and falls further
 between them (balls_a, 18-20 spp: mean FLIP 0.047 against 16's 0.038), which the guided
-sampler's rounding (``guided_plan.sobol_friendly``) and its one count per frame
-(``guided_plan.column_count``) avoid.
+sampler's rounding (``sample_counts.sobol_friendly``) and its one count per frame
+(``sample_counts.column_count``) avoid.
 """
 from __future__ import annotations
 

@@ -27,7 +27,7 @@ def render_frames(scene, args, request, frames: tuple[int, ...], out: Path) -> i
     from ...addon.maps.director_maps import MapWarning
     from ...core.files import write_json
     from ...core.sampling.render_stats import sequence_stats
-    from ...core.sampling.guided_plan import SequenceBudget
+    from ...core.sampling.sequence_budget import SequenceBudget
     from ...core.maps.files import write_map_set
     from ...core.maps.xmap import XMapWarning
     from ...core.progress import run_steps

@@ -1,0 +1,109 @@
+"""How many samples per pixel a guided frame renders: counts Cycles' sample patterns like.
+
+Cycles' patterns stratify best at powers of two, and after denoising it shows: a count just
+above a power of two renders at it (``sobol_friendly``), one just below it is raised to it
+where the budget's slack reaches (``power_of_two_within``), the columns of a flat pass and
+the frames of a range hold one count (``column_count``, ``HOLD_RANGE``), and a frame's
+denoising-guide prefilter is not bought with a power of two (``prefilter_pays``). Plain
+numbers; the clock is read by the caller.
+"""
+from __future__ import annotations
+
+#: A whole-frame count this little above a power of two is rounded down to it (see
+#: ``sobol_friendly``), up to ``POWER_OF_TWO_LARGEST``. Measured up to 48 samples. The
+#: budget is a ceiling: a run may end up to a third early, where the extra samples would
+#: have bought little (statue, road, balls_b) or made the frame worse (balls_a).
+POWER_OF_TWO_SLACK = 1.5
+POWER_OF_TWO_LARGEST = 32
+
+
+def sobol_friendly(count: int) -> int:
+    """``count`` samples per pixel, or the power of two below it when that is within
+    ``POWER_OF_TWO_SLACK``: Cycles' sample patterns stratify best at powers of two, and after
+    denoising the difference shows. Measured (uniform, auto's estimator, mean FLIP against
+    the converged reference, in ``docs/bench_sample_counts.txt``), with the legacy Tabulated
+    Sobol pattern (medians of 4 seeds, 2 for 22 and 36-48): balls_a 16 / 18 / 20 / 22 / 24
+    spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44 / 48 spp 0.0307 /
+    0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp 0.0454 / 0.0457 /
+    0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520 / 0.0503 /
+    0.0479. With the blue noise auto renders with (``sample_pattern``; means of 2 seeds):
+    balls_a 16 / 18 / 20 / 22 / 24 / 28 / 32 spp 0.0377 / 0.0476 / 0.0463 / 0.0421 / 0.0373 /
+    0.0383 / 0.0274; statue 16 / 20 / 22 / 24 / 32 spp 0.0445 / 0.0439 / 0.0421 / 0.0411 /
+    0.0378; balls_b 16 / 20 / 22 spp 0.0505 / 0.0491 / 0.0484; road 0.0400 / 0.0387 /
+    0.0377. So on balls_a every count from 17 to 31 is no better than 16, with blue noise
+    much worse at 18-22; elsewhere 20-23 samples buy 2-6 % of FLIP for 25-45 % more time,
+    about what the power of two's own curve gives, so rounding them down costs nothing in
+    equal-quality speed. Guided's three columns at mean counts of 35-37 spp measured FLIP
+    0.0308 on balls_a, where 32 in every column gave 0.0274 (``docs/bench_sample_pattern.txt``)."""
+    count = int(count)
+    if count < 2:
+        return max(count, 1)
+    power = 1 << (count.bit_length() - 1)
+    if power > POWER_OF_TWO_LARGEST:
+        return count
+    return power if count < POWER_OF_TWO_SLACK * power else count
+
+
+#: A flat pass's later column keeps the first one's count from the low end of this range of
+#: it (``column_count``); a later frame of a guided range keeps the frame before's until it
+#: affords more than the high end (``SequenceBudget.steady_count``).
+HOLD_RANGE = (0.85, 1.3)
+
+
+def column_count(first: int, affordable: int) -> int:
+    """The count of a flat pass's later column: the first column's while the column affords
+    from ``HOLD_RANGE[0]`` of it to less than twice it, else ``sobol_friendly(affordable)``.
+
+    One frame at one count: the pilot's timing is noisy at small budgets (a quarter-resolution
+    render of a few samples in ~0.07 s), and the columns paced after a misjudged first one
+    came out uneven, which scored worse than their mean count (balls_a at uniform 16 spp's
+    time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp, mean FLIP 0.0564 / 0.0445 /
+    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the first column's
+    count beyond what a column affords by the clock (the budget's 15 %) or leaves a column
+    short of twice it unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
+    if HOLD_RANGE[0] * first <= affordable < 2 * first:
+        return first
+    return sobol_friendly(affordable)
+
+
+#: A guided run may end this share over its budget to render at the power of two above its
+#: count (``power_of_two_within``). A range: without it a held count that cost a little more
+#: than each frame's share left the last frames to pay back all of it, and they dropped
+#: (street, frames 1-8 at uniform 32 spp's time: 16, 32 x6, 16 spp, each change a flicker;
+#: measured at 0.1 too, where the pricing error of 2-s frames ran a 2-frame range 1.12x
+#: over). A still: road at uniform 32 spp's time rendered 28-29 spp in 85-92 % of its budget.
+BUDGET_OVERRUN = 0.05
+
+
+def power_of_two_within(count: int, reach: float, ceiling: int) -> int:
+    """The largest power of two within ``reach`` (and the ceiling) where that is above
+    ``count``, else ``count``. A power of two renders better than the count below it
+    beyond what the samples add (Blender 5's blue noise, street frame 1: 28 spp mean
+    FLIP 0.0690, 32 spp 0.0662; a guided range at 29 spp on every frame scored 0.0697)."""
+    top = int(min(reach, ceiling))
+    if top < 1:
+        return count
+    power = 1 << (top.bit_length() - 1)
+    return max(power, count)
+
+
+def prefilter_pays(count_plain: int, count_prefiltered: int) -> bool:
+    """Whether a frame that would render ``count_plain`` samples per pixel with the plain
+    denoise should spend the prefilter's time on its denoising guides instead, rendering
+    ``count_prefiltered``: yes unless that takes it below a power of two the plain denoise
+    reaches. The prefilter bought more than its time on auto's curve at 4-32 spp (balls_a,
+    balls_b, statue: 0.92-1.68x, README "Denoising guides in fog"), but with blue noise a
+    count just below a power of two renders worse than the power of two below it (balls_a:
+    16 spp 0.0377, 18-22 spp 0.0421-0.0476): street's range at uniform 16 spp's time fell
+    from 16 to 12-13 spp a frame for the prefilter's 0.3 s, 1.10x over uniform to 1.00x."""
+    if count_prefiltered >= count_plain:
+        return True
+    return count_plain & (count_plain - 1) != 0
+
+
+def still_count(affordable: float, allowance: float, ceiling: int) -> int:
+    """A still's whole-frame count where it affords ``affordable`` samples per pixel and
+    ``allowance`` more within ``BUDGET_OVERRUN``: at a count Cycles' patterns like
+    (``sobol_friendly``), raised to the power of two above it where the allowance reaches."""
+    count = sobol_friendly(max(1, min(int(affordable), ceiling)))
+    return power_of_two_within(count, affordable + allowance, ceiling)
