@@ -161,9 +161,11 @@ def quality(out: Path, frames: str, repeats: int, blue_noise: bool = False, with
     if blue_noise:
         # What a file made in Blender 5 renders with (street, like every example, carries the
         # legacy pattern, which auto and guided replace): the baseline for such a file.
-        from bench_sample_pattern import blue_noise_copy
+        from scene_copy import cycles_copy
 
-        copy = blue_noise_copy(SCENE, out)
+        from xsl_render.core.sampling.sample_pattern import BLENDER_DEFAULT
+
+        copy = cycles_copy(SCENE, out, sampling_pattern=BLENDER_DEFAULT)
         for spp in UNIFORM_SPP[:-1]:
             run(f"blue_noise_uniform_{spp}", "--mode", "uniform", "--spp", spp, scene=copy)
 

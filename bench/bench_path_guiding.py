@@ -13,7 +13,6 @@ idle machine (the times are the measure).
 """
 from __future__ import annotations
 
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -21,31 +20,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_estimator import (METRICS, ROOT, SIZES, SPEEDUP_NOTE, _register, chosen_scenes,  # noqa: E402
                              error_cells, scene_arguments, speedup_cell)
+from scene_copy import cycles_copy  # noqa: E402
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
 #: The curve's ceiling: 4 / 8 / 16 / 32 spp, where issue 20's budgets lie.
 CEILING = 32
-
-_SET_GUIDING = """
-import bpy, sys
-source, target = sys.argv[sys.argv.index("--") + 1:]
-bpy.ops.wm.open_mainfile(filepath=source)
-for scene in bpy.data.scenes:
-    scene.cycles.use_guiding = True
-    scene.cycles.use_surface_guiding = True
-    scene.cycles.use_volume_guiding = True
-bpy.ops.wm.save_as_mainfile(filepath=target, copy=True)
-"""
-
-
-def guiding_copy(scene: str, folder: Path) -> Path:
-    """The example scene saved with path guiding on, nothing else changed (in a fresh Python:
-    opening a file here would replace the bench's own Blender data)."""
-    target = folder / f"{scene}.blend"
-    subprocess.run([sys.executable, "-c", _SET_GUIDING, "--", str(ROOT / "example_blends" / f"{scene}.blend"),
-                    str(target)], check=True, capture_output=True)
-    return target
-
 
 def report(scene: str, plain: dict, guided: dict) -> list[str]:
     from xsl_render.core.validation.curves import speedups_against
@@ -81,7 +60,8 @@ def main(argv=None) -> int:
             settings = CurvesSettings(ceiling=CEILING, resolution=SIZES[scene], repeats=args.repeats,
                                       curves=("auto",), vdp=False)
             plain = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)
-            copy = guiding_copy(scene, Path(folder))
+            copy = cycles_copy(scene, Path(folder), use_guiding=True, use_surface_guiding=True,
+                               use_volume_guiding=True)
             guided = run_curves(copy, CurvesSettings(ceiling=CEILING, resolution=SIZES[scene],
                                                      repeats=args.repeats, curves=("auto",), vdp=False,
                                                      reference=Path(plain["reference"]["path"])),

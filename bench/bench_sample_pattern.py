@@ -20,7 +20,6 @@ auto's. Run it on an otherwise idle machine (the times are the measure).
 """
 from __future__ import annotations
 
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -28,29 +27,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_estimator import (METRICS, ROOT, SIZES, SPEEDUP_NOTE, _register, chosen_scenes,  # noqa: E402
                              error_cells, scene_arguments, speedup_cell)
+from scene_copy import cycles_copy  # noqa: E402
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
-
-_SET_PATTERN = """
-import bpy, sys
-source, target, pattern = sys.argv[sys.argv.index("--") + 1:]
-bpy.ops.wm.open_mainfile(filepath=source)
-for scene in bpy.data.scenes:
-    scene.cycles.sampling_pattern = pattern
-bpy.ops.wm.save_as_mainfile(filepath=target, copy=True)
-"""
-
-
-def blue_noise_copy(scene: str, folder: Path) -> Path:
-    """The example scene saved with Blender 5's sample pattern, nothing else changed (in a
-    fresh Python: opening a file here would replace the bench's own Blender data)."""
-    from xsl_render.core.sampling.sample_pattern import BLENDER_DEFAULT
-
-    target = folder / f"{scene}.blend"
-    subprocess.run([sys.executable, "-c", _SET_PATTERN, "--", str(ROOT / "example_blends" / f"{scene}.blend"),
-                    str(target), BLENDER_DEFAULT], check=True, capture_output=True)
-    return target
-
 
 def report(scene: str, data: dict, blue: dict) -> list[str]:
     from xsl_render.core.validation.curves import speedups_against
@@ -84,6 +63,7 @@ def main(argv=None) -> int:
         return 2
 
     from xsl_render.addon.validation.curves_runner import CurvesSettings, run_curves
+    from xsl_render.core.sampling.sample_pattern import BLENDER_DEFAULT
 
     lines = [f"bench_sample_pattern: {', '.join(scenes)}, ceiling 64, median of {args.repeats}"]
     with tempfile.TemporaryDirectory(prefix="bench-pattern-") as folder:
@@ -91,7 +71,7 @@ def main(argv=None) -> int:
             settings = CurvesSettings(ceiling=64, resolution=SIZES[scene], repeats=args.repeats,
                                       curves=_register(scene, False, rates=False), vdp=False)
             data = run_curves(ROOT / "example_blends" / f"{scene}.blend", settings, args.out / scene)
-            copy = blue_noise_copy(scene, Path(folder))
+            copy = cycles_copy(scene, Path(folder), sampling_pattern=BLENDER_DEFAULT)
             blue = run_curves(copy, CurvesSettings(ceiling=64, resolution=SIZES[scene], repeats=args.repeats,
                                                    curves=("uniform",), vdp=False,
                                                    reference=Path(data["reference"]["path"])),
