@@ -219,7 +219,9 @@ def test_equal_time_baselines_sync_a_volume_scene_once(blender, mode):
 
     scene = open_blend(EXAMPLES / "balls_b.blend")
     options = RenderOptions(max_spp=4096, resolution=(64, 48), denoise=False)
-    budget = 5.0
+    # Room after the sync on a slower machine: balls_b synced in 5.0 s on one where a 5-s
+    # budget left the timed render a 0.01-s limit (3.2-3.7 s on others).
+    budget = 10.0
     if mode == "uniform":
         outcome = sr.render_uniform(scene, options, seconds=budget)
     else:
