@@ -360,7 +360,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                         return pace.steady_count(affordable, options.max_spp, frame_sample_s)
                     return first_column_count(affordable, frame_sample_s)
 
-                pilot_noisy = pilot.guides is not None and guides_are_noisy(pilot.guides[..., :3])
+                pilot_noisy = (may_prefilter and pilot.guides is not None
+                               and guides_are_noisy(pilot.guides[..., :3]))
                 denoise_reserve, allow_prefilter = denoise_plan(first_count, pilot_noisy)
                 if options.denoise:
                     denoise_reserve = max(denoise_reserve, _DENOISE_RATIO * scoring_denoise)
