@@ -128,6 +128,12 @@ def test_every_curve_and_speedup_in_curves_json(curves):
     guided = data["runs"]["guided_xsl_at_uniform_8spp"]["repeats"][0]["stats"]
     assert guided["phases_s"]["maps"] > 0 and guided["guided"]["importance"] == "xsl"
     assert guided["time_budget_s"] == pytest.approx(data["runs"]["uniform_8spp"]["seconds"])
+    # What the guided run decided is kept with its point: its price of a sample and its counts.
+    assert guided["seconds_per_pixel_sample"] > 0 and guided["pilot_spp"] >= 1
+    assert sum(rect["spp"] * (rect["row1"] - rect["row0"]) * (rect["col1"] - rect["col0"])
+               for rect in guided["final_pass"]["rects"]) == guided["final_pass"]["samples"] \
+        == guided["total_samples"]                  # the counts rendered, not the plan's
+    assert "tiles" not in guided
     assert data["runs"]["adaptive_0.1"]["params"] == {"noise_threshold": 0.1, "max_spp": 32}
     effect = data["runs"]["guiding_8spp"]["repeats"][0]["stats"]["path_guiding"]["effect"]
     assert effect.startswith("used")          # Cycles really guided: the image differs from uniform

@@ -83,6 +83,8 @@ def test_guided_render_keeps_its_time_budget(fog, exponent):
     assert budget / POWER_OF_TWO_SLACK <= stats.wall_s <= 1.1 * budget
     assert stats.wall_s == pytest.approx(sum(stats.phases_s.values()))
     assert outcome.samples.min() >= 1 and stats.pilot_spp >= 1
+    # The final pass is recorded as rendered (the pacer's counts), pixel-sample for pixel-sample.
+    assert stats.final_pass["samples"] == stats.total_samples == int(outcome.samples.sum())
     if exponent == 0:
         # Nothing to score: the plan is flat, three columns of the frame (the later paced).
         assert stats.final_pass["flat"] and stats.final_pass["renders"] == 3

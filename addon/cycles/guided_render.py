@@ -384,6 +384,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 pacer = BudgetPacer([rate * rect.samples for rect in rects], _RENDER_OVERHEAD_S,
                                     side_by_side=final.flat)
                 began, rendered_s, rendered_samples = clock.now(), 0.0, 0
+                rendered_rects = []
                 first_column = None
                 for index, rect in enumerate(rects):
                     paused = clock.pause()
@@ -407,6 +408,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     pacer.record(seconds, rate * spp * rect.area)
                     rendered_s += seconds
                     rendered_samples += spp * rect.area
+                    rendered_rects.append(replace(rect, spp=spp))
+                # The stats record the counts rendered, not the plan's (the pacer moved them).
+                final = replace(final, rects=rendered_rects)
                 phases["final"] = clock.now() - began
             if pace is not None and rendered_samples:
                 pace.observe(rendered_s, rendered_samples,

@@ -46,10 +46,15 @@ METRICS = ("flip", "flip_tile95", "flip_share", "mse", "jod")
 SEQUENCE_METRICS = ("flip", "flip_tile95", "flip_share", "mse", "flicker", "jod")
 #: Per-frame figures of a run over frames (``core.validation.sequence.FRAME_METRICS``).
 FRAME_FIGURES = ("flip", "flip_tile95", "flip_share", "mse", "flicker")
-#: Statistics of a render kept with each repeat in curves.json.
+#: Statistics of a render kept with each repeat in curves.json: what it cost and what it
+#: decided (a guided run's pilot, its price of a sample, its final pass's counts, its guides'
+#: prefilter), so that a curve's point can be explained without rendering it again. Not the
+#: per-render ``tiles``, whose list grows with the plan.
 STATS_KEPT = ("mode", "wall_s", "phases_s", "total_samples", "mean_spp", "renders", "max_spp",
               "noise_threshold", "time_budget_s", "stopped_by_time", "ideal_speedup",
-              "director_map_mean", "path_guiding", "guided", "pilot_spp", "estimator")
+              "director_map_mean", "path_guiding", "guided", "pilot_spp", "pilot_seconds",
+              "pilot_resolution_divisor", "seconds_per_pixel_sample", "final_pass",
+              "denoise_reserved_s", "denoise_guides", "estimator")
 
 
 def metric_values(metrics: dict) -> dict[str, float | None]:
