@@ -87,7 +87,21 @@ def run_scenes(bench: str, scenes: list[str], out: Path, measure) -> int:
     return 0
 
 
-def _errors(reference, image) -> dict:
+def cached_reference(scene, blend, scene_name: str, bench: str):
+    """The converged reference the estimator benches render and cache (ceiling 64: 1024 spp,
+    seed 7), (H, W, 4); exits naming the bench that renders it where it is not cached."""
+    from xsl_render.addon.validation.reference import reference_inputs
+    from xsl_render.core.validation.reference import find_reference, read_reference
+
+    size = (scene.render.resolution_x, scene.render.resolution_y)
+    cached = find_reference(reference_inputs(scene, blend, max_spp=64, resolution=size).key)
+    if cached is None:
+        raise SystemExit(f"{bench}: no cached reference of {scene_name}; "
+                         f"run bench/bench_estimator.py --scenes {scene_name} first")
+    return read_reference(cached.path, size).image
+
+
+def errors(reference, image) -> dict:
     from xsl_render.core.validation.image_pair import ImagePair, as_rgb
     from xsl_render.core.validation.metrics import compare_images
 
@@ -103,17 +117,10 @@ def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
     from xsl_render.addon.cycles.oidn_library import QUALITY_HIGH
     from xsl_render.addon.cycles.oidn_library import load as load_oidn
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
-    from xsl_render.addon.validation.reference import reference_inputs
-    from xsl_render.core.validation.reference import find_reference, read_reference
 
     scene, blend = open_with_auto_choice(scene_name)
     width, height = SIZES[scene_name]
-    # The reference the estimator benches render and cache (ceiling 64: 1024 spp, seed 7).
-    cached = find_reference(reference_inputs(scene, blend, max_spp=64, resolution=(width, height)).key)
-    if cached is None:
-        raise SystemExit(f"bench_denoise_guides: no cached reference of {scene_name}; "
-                         f"run bench/bench_estimator.py --scenes {scene_name} first")
-    reference = read_reference(cached.path, (width, height)).image
+    reference = cached_reference(scene, blend, scene_name, "bench_denoise_guides")
 
     renders = []
     for seed in range(repeats + 1):           # one more: the last seed's guides are "other seed"'s
@@ -160,7 +167,7 @@ def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
             began = time.perf_counter()
             image = denoised(k)
             seconds.append(time.perf_counter() - began)
-            rows.append(_errors(reference, image))
+            rows.append(errors(reference, image))
         med = {key: statistics.median(row[key] for row in rows) for key in rows[0]}
         lines.append(f"{label:28s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e} "
                      f"{statistics.median(seconds):5.2f}  "

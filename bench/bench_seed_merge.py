@@ -1,0 +1,80 @@
+"""Benchmark: are 2N samples per pixel from two seeds worth 2N from one, after OIDN?
+
+A guided still's count is priced by a pilot whose timing is noisy, and with blue noise a
+frame at a count just below a power of two is far worse than one at it (``sample_counts``).
+A pass that rendered too few could be topped up: a second render of the same pixels with
+another seed, merged by sample count (``PassAccumulator``), costs exactly the missing
+samples. This measures what such a merge is worth, per scene and seed pair (``2k``,
+``2k + 1``), denoised as every run is (OIDN with the guides, merged alike):
+
+- ``one seed, 2N``: one render of 2N samples;
+- ``two seeds, N + N``: two renders of N samples, merged;
+- ``one seed, N``: the first of those alone.
+
+Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp and blue noise
+(``bench_denoise_guides.open_with_auto_choice``), against the cached converged reference.
+
+    .venv/bin/python bench/bench_seed_merge.py --repeats 3 [--spp 8]
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_denoise_guides import cached_reference, errors, open_with_auto_choice, run_scenes  # noqa: E402
+from bench_estimator import SIZES, chosen_scenes, scene_arguments  # noqa: E402
+
+SCENES = ("road", "balls_a", "balls_b", "statue")
+SPP = 8
+
+
+def measure(scene_name: str, repeats: int, spp: int) -> list[str]:
+    from xsl_render.addon.cycles.denoise import denoise
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
+    from xsl_render.core.sampling.pass_merge import PassAccumulator
+
+    scene, blend = open_with_auto_choice(scene_name)
+    width, height = SIZES[scene_name]
+    reference = cached_reference(scene, blend, scene_name, "bench_seed_merge")
+
+    def denoised(pixels, guides):
+        return denoise(pixels, guides[..., :3], guides[..., 3:6])
+
+    rows: dict[str, list[dict]] = {}
+    for pair in range(repeats):
+        with CyclesWindowRenderer(scene, 2 * pair, guides=True) as renderer:
+            whole = renderer.render(None, 2 * spp)
+            half = renderer.render(None, spp)
+        with CyclesWindowRenderer(scene, 2 * pair + 1, guides=True) as renderer:
+            other = renderer.render(None, spp)
+        image, guides = PassAccumulator(width, height, 4), PassAccumulator(width, height, 6)
+        for part in (half, other):
+            image.add(None, part.pixels, spp)
+            guides.add(None, part.guides, spp)
+        for label, result in ((f"one seed, {2 * spp}", denoised(whole.pixels, whole.guides)),
+                              (f"two seeds, {spp} + {spp}", denoised(image.result(), guides.result())),
+                              (f"one seed, {spp}", denoised(half.pixels, half.guides))):
+            rows.setdefault(label, []).append(errors(reference, result))
+    lines = [f"\n{scene_name} ({width}x{height}), median of {repeats} seed pairs",
+             f"{'run':22s} {'FLIP':>7s} {'p95':>7s} {'MSE':>9s}  FLIP per pair"]
+    for label, results in rows.items():
+        med = {key: statistics.median(row[key] for row in results) for key in ("flip", "p95", "mse")}
+        lines.append(f"{label:22s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e}  "
+                     + " ".join(f"{row['flip']:.4f}" for row in results))
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = scene_arguments(__doc__, "bench-seed-merge", SCENES)
+    parser.add_argument("--spp", type=int, default=SPP, help=f"samples per pixel of each half (default {SPP})")
+    args = parser.parse_args(argv)
+    scenes = chosen_scenes(args, SCENES, "bench_seed_merge")
+    if scenes is None:
+        return 2
+    return run_scenes("bench_seed_merge", scenes, args.out, lambda scene: measure(scene, args.repeats, args.spp))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
