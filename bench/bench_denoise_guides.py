@@ -168,22 +168,31 @@ def measure(scene_name: str, repeats: int, spp_count: int = 16) -> list[str]:
             image = denoised(k)
             seconds.append(time.perf_counter() - began)
             rows.append(errors(reference, image))
-        med = {key: statistics.median(row[key] for row in rows) for key in rows[0]}
-        lines.append(f"{label:28s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e} "
-                     f"{statistics.median(seconds):5.2f}  "
-                     + " ".join(f"{row['flip']:.4f}" for row in rows))
+        lines.append(error_line(label, rows, f"{statistics.median(seconds):5.2f}"))
     return lines
 
 
-def main(argv=None) -> int:
-    parser = scene_arguments(__doc__, "bench-guides", SCENES)
-    parser.add_argument("--spp", type=int, default=SPP, help=f"samples per pixel (default {SPP})")
-    args = parser.parse_args(argv)
-    scenes = chosen_scenes(args, SCENES, "bench_denoise_guides")
-    if scenes is None:
+def error_line(label: str, rows: list[dict], extra: str = "") -> str:
+    """One run's medians of ``errors`` over its repeats, then its mean FLIP per repeat."""
+    med = {key: statistics.median(row[key] for row in rows) for key in ("flip", "p95", "mse")}
+    return (f"{label:28s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e} {extra} "
+            + " ".join(f"{row['flip']:.4f}" for row in rows))
+
+
+def main_at_spp(doc: str, bench: str, out: str, scenes: tuple[str, ...], spp: int, measure) -> int:
+    """A bench over example scenes at one sample count: --out, --scenes, --repeats, --spp;
+    ``measure(scene, repeats, spp)`` per scene."""
+    parser = scene_arguments(doc, out, scenes)
+    parser.add_argument("--spp", type=int, default=spp, help=f"samples per pixel (default {spp})")
+    args = parser.parse_args(sys.argv[1:])
+    chosen = chosen_scenes(args, scenes, bench)
+    if chosen is None:
         return 2
-    return run_scenes("bench_denoise_guides", scenes, args.out,
-                      lambda scene: measure(scene, args.repeats, args.spp))
+    return run_scenes(bench, chosen, args.out, lambda scene: measure(scene, args.repeats, args.spp))
+
+
+def main() -> int:
+    return main_at_spp(__doc__, "bench_denoise_guides", "bench-guides", SCENES, SPP, measure)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,9 @@ at 16 spp, and prints each estimate's ratio to what the full frame paid per pixe
 
 - ``diff 1-2`` (shipped), ``diff 1-4``: the difference of two renders, which leaves out a
   render's fixed cost;
-- ``whole 2``: the 2-sample render less ``_RENDER_OVERHEAD_S``.
+- ``whole 2``: the 2-sample render less ``_RENDER_OVERHEAD_S``;
+- ``full: whole 1``: one sample of the whole frame at full resolution, less it (a flat
+  still's pilot, ``_STILL_PILOT_SPP``).
 
 The full frame's own seconds are printed too: their spread from seed to seed is the floor
 under any pilot. Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
@@ -46,7 +48,7 @@ def measure(scene_name: str, repeats: int) -> list[str]:
 
     lines = [f"\n{scene_name} ({width}x{height}): estimate / full frame's seconds per pixel-sample",
              f"{'seed':>4s} {'full s':>7s} " + " ".join(f"{f'1/{r}: diff 1-2':>13s} {'diff 1-4':>8s} {'whole 2':>7s}"
-                                                      for r in REDUCTIONS)]
+                                                      for r in REDUCTIONS) + f" {'full: whole 1':>12s}"]
     ratios: dict[str, list[float]] = {}
     fulls = []
     for seed in range(repeats):
@@ -58,6 +60,7 @@ def measure(scene_name: str, repeats: int) -> list[str]:
                 pixels = (width // reduce) * (height // reduce)
                 estimates[reduce] = ((two - one) / pixels, (four - one) / (3 * pixels),
                                      (two - _RENDER_OVERHEAD_S) / (2 * pixels))
+            one = timed(renderer, None, 1)
             full = timed(renderer, None, SPP)
         rate = (full - _RENDER_OVERHEAD_S) / (SPP * width * height)
         fulls.append(full)
@@ -66,7 +69,9 @@ def measure(scene_name: str, repeats: int) -> list[str]:
             for name, value in zip(("diff 1-2", "diff 1-4", "whole 2"), values):
                 ratios.setdefault(f"1/{reduce} {name}", []).append(value / rate)
             cells.append(f"{values[0] / rate:13.2f} {values[1] / rate:8.2f} {values[2] / rate:7.2f}")
-        lines.append(f"{seed:4d} {full:7.2f} " + " ".join(cells))
+        whole_one = (one - _RENDER_OVERHEAD_S) / (width * height) / rate
+        ratios.setdefault("full whole 1", []).append(whole_one)
+        lines.append(f"{seed:4d} {full:7.2f} " + " ".join(cells) + f" {whole_one:12.2f}")
     lines.append(f"full frame {min(fulls):.2f}-{max(fulls):.2f} s; per estimate, median [min, max]: "
                  + "; ".join(f"{name} {statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]"
                              for name, v in ratios.items()))

@@ -18,13 +18,13 @@ Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp and blue
 """
 from __future__ import annotations
 
-import statistics
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_denoise_guides import cached_reference, errors, open_with_auto_choice, run_scenes  # noqa: E402
-from bench_estimator import SIZES, chosen_scenes, scene_arguments  # noqa: E402
+from bench_denoise_guides import (cached_reference, error_line, errors, main_at_spp,  # noqa: E402
+                                  open_with_auto_choice)
+from bench_estimator import SIZES  # noqa: E402
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
 SPP = 8
@@ -58,23 +58,10 @@ def measure(scene_name: str, repeats: int, spp: int) -> list[str]:
                               (f"one seed, {spp}", denoised(half.pixels, half.guides))):
             rows.setdefault(label, []).append(errors(reference, result))
     lines = [f"\n{scene_name} ({width}x{height}), median of {repeats} seed pairs",
-             f"{'run':22s} {'FLIP':>7s} {'p95':>7s} {'MSE':>9s}  FLIP per pair"]
-    for label, results in rows.items():
-        med = {key: statistics.median(row[key] for row in results) for key in ("flip", "p95", "mse")}
-        lines.append(f"{label:22s} {med['flip']:7.4f} {med['p95']:7.4f} {med['mse']:9.2e}  "
-                     + " ".join(f"{row['flip']:.4f}" for row in results))
+             f"{'run':28s} {'FLIP':>7s} {'p95':>7s} {'MSE':>9s}  FLIP per pair"]
+    lines += [error_line(label, results) for label, results in rows.items()]
     return lines
 
 
-def main(argv=None) -> int:
-    parser = scene_arguments(__doc__, "bench-seed-merge", SCENES)
-    parser.add_argument("--spp", type=int, default=SPP, help=f"samples per pixel of each half (default {SPP})")
-    args = parser.parse_args(argv)
-    scenes = chosen_scenes(args, SCENES, "bench_seed_merge")
-    if scenes is None:
-        return 2
-    return run_scenes("bench_seed_merge", scenes, args.out, lambda scene: measure(scene, args.repeats, args.spp))
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main_at_spp(__doc__, "bench_seed_merge", "bench-seed-merge", SCENES, SPP, measure))
