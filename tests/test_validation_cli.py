@@ -16,6 +16,9 @@ from conftest import EXAMPLES, xsl_render_cli
 from support.fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
+from xsl_render.core.validation.curves import curve_points, monotone_envelope
+from xsl_render.core.validation.results import uniform_curve
+
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 W, H = 64, 36
@@ -171,7 +174,15 @@ def test_demo_end_to_end(tmp_path):
                            "uniform_equal_time", "adaptive_equal_time")
     assert runs["xsl"]["metrics"]["flip"]["mean_flip"] > 0
     assert runs["xsl"]["reference_metrics"]["flip"]["mean_flip"] > 0
-    assert runs["xsl"]["equal_quality"]["flip"]["value"] is not None
+    # xsl is placed on the uniform curve (gold and the uniform runs). Its renders of a few
+    # tens of milliseconds at this size may time out of order on a loaded machine, leaving
+    # one point on the curve's monotone envelope: then the speedup says why it has no value.
+    flip = runs["xsl"]["equal_quality"]["flip"]
+    envelope = monotone_envelope(curve_points(uniform_curve(runs), "flip"))
+    if len(envelope) >= 2:
+        assert flip["value"] == pytest.approx(flip["time_to_reach_s"] / runs["xsl"]["time_s"])
+    else:
+        assert flip["value"] is None and "one point" in flip["reason"]
     # The demo prints equal-quality speedups over uniform, never a time ratio to gold.
     assert "equal quality vs uniform" in result.stdout and "faster than gold" not in result.stdout
     assert results(out)["scenes"]["road"]["maps"]["minbound"]["lights"]["drawn"]   # lamps in the L map
