@@ -6,7 +6,7 @@ per sample of the frame against 0.19-0.27 at 16, which reads as a fixed part per
 (about 0.9 s) priced as samples. This renders, in one Cycles session after the scene sync
 (what ``render --frames`` does), each frame asked for as whole frames at 1, 4, 8 and 16 spp
 (the order reversed on every other frame, so that a first render after the frame change
-lands on each count), and fits seconds = fixed + per-sample x spp per frame, least squares.
+lands on each count), and fits seconds = fixed + per-sample x spp per frame (least squares).
 
 Street at 256x144 with its own estimator (null scattering, which a range keeps) and blue
 noise, the sample pattern auto renders with.
@@ -23,17 +23,11 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_estimator import ROOT, SIZES  # noqa: E402
+
 COUNTS = (1, 4, 8, 16)
-SIZE = (256, 144)
-
-
-def fit(points: list[tuple[int, float]]) -> tuple[float, float]:
-    """(fixed seconds, seconds per sample) of the least-squares line through (spp, seconds)."""
-    xs, ys = [float(x) for x, _ in points], [y for _, y in points]
-    mean_x, mean_y = statistics.fmean(xs), statistics.fmean(ys)
-    slope = sum((x - mean_x) * (y - mean_y) for x, y in zip(xs, ys)) / sum((x - mean_x) ** 2 for x in xs)
-    return mean_y - slope * mean_x, slope
+SIZE = SIZES["street"]
 
 
 def main(argv=None) -> int:
@@ -69,7 +63,7 @@ def main(argv=None) -> int:
                 seconds = {}
                 for spp in (COUNTS if frame % 2 else tuple(reversed(COUNTS))):
                     seconds[spp] = renderer.render(None, spp).seconds
-                fixed, per_sample = fit(list(seconds.items()))
+                per_sample, fixed = statistics.linear_regression(list(seconds), list(seconds.values()))
                 fixed_parts.append(fixed)
                 lines.append(f"{seed:4d} {frame:5d} " + " ".join(f"{seconds[spp]:9.3f}" for spp in COUNTS)
                              + f" {fixed:8.3f} {per_sample:8.3f}")

@@ -9,8 +9,8 @@ at 16 spp, and prints each estimate's ratio to what the full frame paid per pixe
 - ``diff 1-2`` (shipped), ``diff 1-4``: the difference of two renders, which leaves out a
   render's fixed cost;
 - ``whole 2``: the 2-sample render less ``_RENDER_OVERHEAD_S``;
-- ``full: whole 1``: one sample of the whole frame at full resolution, less it (a flat
-  still's pilot, ``_STILL_PILOT_SPP``).
+- ``full: whole 1``: one sample of the whole frame at full resolution, less it (a pilot
+  tried for a flat still and not shipped: README, "What still limits a guided still").
 
 The full frame's own seconds are printed too: their spread from seed to seed is the floor
 under any pilot. Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
