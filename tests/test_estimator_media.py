@@ -234,8 +234,9 @@ def test_auto_gives_the_smoke_its_own_step_and_the_scene_gets_its_materials_back
     so, Cycles renders it (the image is the one the same settings made by hand give), and
     the scene's and materials' settings are back afterwards."""
     from xsl_render.addon.cycles import selective_render as sr
+    from xsl_render.addon.cycles.sample_pattern import apply_sample_pattern
     from xsl_render.addon.maps.estimator_choice import with_estimator_choice
-    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.addon.scene.state import preserved_scene, settings_dump
     from xsl_render.core.sampling.render_options import RenderOptions
 
     scene = _two_media_scene(blender)
@@ -254,17 +255,18 @@ def test_auto_gives_the_smoke_its_own_step_and_the_scene_gets_its_materials_back
     assert "smoke at" in estimator["described"]
     # The same settings by hand, with the scene's own estimator (and the sample pattern auto
     # renders this legacy-pattern test scene with: core.sampling.sample_pattern).
-    assert estimator["sample_pattern"] == "AUTOMATIC"
-    scene.cycles.sampling_pattern = estimator["sample_pattern"]
-    scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, rate
-    smoke_material.cycles.volume_step_rate = 1.5 * smoke / rate
-    by_hand = sr.render_uniform(scene, RenderOptions(max_spp=16, denoise=False), spp=16)
-    np.testing.assert_array_equal(auto.image, by_hand.image)
-    smoke_material.cycles.volume_step_rate = 1.5
-    scene.cycles.volume_step_rate = rate
-    # The smoke's own step showed (the same settings render bit-identically, as above).
-    assert np.abs(sr.render_uniform(scene, RenderOptions(max_spp=16, denoise=False), spp=16).image
-                  - auto.image).max() > 1e-4
+    assert estimator["sample_pattern"] == "BLUE_NOISE_ROUND"
+    with preserved_scene(scene):          # (the debug options the pattern needs come back off)
+        apply_sample_pattern(scene, estimator["sample_pattern"])
+        scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, rate
+        smoke_material.cycles.volume_step_rate = 1.5 * smoke / rate
+        by_hand = sr.render_uniform(scene, RenderOptions(max_spp=16, denoise=False), spp=16)
+        np.testing.assert_array_equal(auto.image, by_hand.image)
+        smoke_material.cycles.volume_step_rate = 1.5
+        scene.cycles.volume_step_rate = rate
+        # The smoke's own step showed (the same settings render bit-identically, as above).
+        assert np.abs(sr.render_uniform(scene, RenderOptions(max_spp=16, denoise=False), spp=16).image
+                      - auto.image).max() > 1e-4
 
 
 @pytest.mark.blender

@@ -33,6 +33,7 @@ from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
 from ..scene.geometry import step_setting
 from ..scene.probe import camera_model, render_size
 from ..scene.state import preserved_scene
+from .sample_pattern import apply_sample_pattern
 from .tile_render import CyclesWindowRenderer, RenderedWindow
 
 #: Cycles' own default noise threshold, what an artist switching adaptive sampling on gets.
@@ -76,7 +77,7 @@ def apply_estimator(scene, choice) -> None:
     materials' and the world's own steps too where auto gave some media coarser ones, and
     the sample pattern where auto chose one."""
     if choice.sample_pattern is not None:
-        scene.cycles.sampling_pattern = choice.sample_pattern
+        apply_sample_pattern(scene, choice.sample_pattern)
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)

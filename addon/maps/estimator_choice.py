@@ -36,8 +36,8 @@ FOLLOWING_FRAME_PIXELS = 200
 def choose_estimator(scene, options: RenderOptions, spp: float,
                      previous: EstimatorChoice | None = None) -> EstimatorChoice:
     """The volume estimator a run of ``spp`` samples per pixel renders with, and for auto the
-    sample pattern (Blender 5's blue noise where the file carries the legacy one:
-    ``core.sampling.sample_pattern``).
+    sample pattern (blue noise, its sequence rounded up to a power of two, where the file
+    carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``).
 
     ``options.estimator`` other than auto is taken as given; auto predicts (``_volumes``),
     never trying a step rate above ``options.step_rate`` when one is given, and keeping

@@ -171,7 +171,8 @@ def preserved_scene(scene):
     (frame, camera, world, engine, samples, border, output path, persistent data, passes,
     volume flags, material override), material slot assignments and object render
     visibility, and the animated values of the scene's frame when the block changed the
-    frame; removes datablocks the block created (unless kept).
+    frame; removes datablocks the block created (unless kept). The outermost block also puts
+    back the Blender preferences a debug sample pattern turns on (``_PREFERENCES``).
     """
     import bpy
 
@@ -184,6 +185,7 @@ def preserved_scene(scene):
     state = SceneState(scene)
     frame = (scene.frame_current, scene.frame_subframe)
     key = scene.as_pointer()
+    preferences = _preference_values() if key not in _open_blocks else None
     _open_blocks[key] = _open_blocks.get(key, 0) + 1
     try:
         yield state
@@ -207,6 +209,9 @@ def preserved_scene(scene):
             scene.update_tag()
             for name in touched - {"cycles"}:
                 structs[name].id_data.update_tag()
+        if preferences is not None:
+            # After the settings: a debug sample pattern reads back only while they are on.
+            _restore_preferences(preferences)
         if moved:
             # Setting frame_current back does not re-evaluate the animation: the animated
             # values (fog density, lamp energy...) would keep the later frame's until the
@@ -238,6 +243,32 @@ def _volume_changes(structs: dict, saved: dict) -> set[str]:
             if (name in ("cycles", "world_cycles") or name.startswith("material_cycles:"))
             and any(value != saved[name].get(prop) for prop, value in rna_values(struct).items()
                     if prop.startswith("volume_") or prop == "sampling_pattern")}
+
+
+#: Blender preferences a block may turn on: (path from ``bpy.context.preferences``, name).
+#: Cycles honours a debug sample pattern only with both (``addon.cycles.sample_pattern``).
+_PREFERENCES = (("view", "show_developer_ui"), ("experimental", "use_cycles_debug"))
+
+
+def _preference_values() -> dict:
+    """The preferences a block may touch, and whether they were unsaved changes already."""
+    import bpy
+
+    preferences = bpy.context.preferences
+    values = {(path, name): getattr(getattr(preferences, path), name) for path, name in _PREFERENCES}
+    return values | {("", "is_dirty"): preferences.is_dirty}
+
+
+def _restore_preferences(values: dict) -> None:
+    """Put back what ``_preference_values`` recorded, the unsaved-changes flag last (Blender
+    would otherwise save the preferences on quit, if the artist auto-saves them)."""
+    import bpy
+
+    preferences = bpy.context.preferences
+    for (path, name), value in values.items():
+        struct = getattr(preferences, path) if path else preferences
+        if getattr(struct, name) != value:
+            setattr(struct, name, value)
 
 
 def _render_output(item) -> bool:

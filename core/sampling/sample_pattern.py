@@ -11,14 +11,26 @@ spp: uniform with the files' own settings, medians of 3 (``bench/bench_sample_pa
 against 0.0509, balls_b 0.0611 against 0.0744, statue 0.0511 against 0.0529, the renders
 0-37 % faster; with auto's volume estimator (by hand, seeds 0-2; balls_b 0-1, road 0-3)
 balls_a 0.0376 against 0.0410, statue 0.0442 against 0.0454, balls_b 0.0505 against
-0.0522, road 0.0400 against 0.0404. So auto renders a file that carries the old pattern
-with Blender 5's, and leaves every other pattern (chosen on purpose through the debug
-options) as it is.
+0.0522, road 0.0400 against 0.0404.
 
-Blue noise is at its best at a power of two samples, as Tabulated Sobol is, and falls further
-between them (balls_a, 18-20 spp: mean FLIP 0.047 against 16's 0.038), which the guided
-sampler's rounding (``sample_counts.sobol_friendly``) and its one count per frame
-(``sample_counts.column_count``) avoid.
+Auto renders blue noise with its sequence rounded up to a power of two (Cycles' own
+"Blue-Noise (round)", ``ROUND``). Cycles lays the pure pattern's sequence out by the render's
+sample count: at a power of two it is the same pattern, the same pixels, but at any other
+count each pixel's samples are a window of the sequence that no longer lines up with its
+power-of-two strata. After OIDN that can cost a scene dearly: balls_a's denoising guides
+came out 6-25x noisier at 12-28 spp than at 16 (the floor keeps a speckle the denoiser
+leaves), mean FLIP at 12 / 20 / 24 / 28 spp 0.0486 / 0.0352 / 0.0326 / 0.0323 against 16's
+0.0276, where the rounded sequence gives 0.0329 / 0.0284 / 0.0262 / 0.0253; on road, statue
+and balls_b, where the pure pattern has no such cliff, the rounded one measured 0-4 % more
+FLIP at those counts (``bench/bench_round_counts.py``, ``docs/bench_round_counts.txt``).
+Auto renders powers of two where it can (``sample_counts``), but a guided pass's columns and
+a range's frames land between them, and the rounded sequence takes away the cliff they fell
+off. So auto renders the legacy pattern and Blender 5's blue noise alike with it, and leaves
+every other pattern (chosen on purpose through the debug options) as it is.
+
+Cycles honours a debug pattern only while Blender's developer interface and Cycles' debug
+options are on (else it renders the pure pattern); the Blender layer turns them on for the
+run and puts them back (``addon.cycles.sample_pattern``).
 """
 from __future__ import annotations
 
@@ -26,9 +38,21 @@ from __future__ import annotations
 BLENDER_DEFAULT = "AUTOMATIC"
 #: The pattern files from before Blender 4.2 are versioned to.
 LEGACY = "TABULATED_SOBOL"
+#: Blue noise, pure (what ``BLENDER_DEFAULT`` renders a final render with, chosen by name).
+PURE = "BLUE_NOISE"
+#: Blue noise with its sequence rounded up to a power of two: what auto renders with.
+ROUND = "BLUE_NOISE_ROUND"
+#: The patterns Cycles offers without its debug options; any other needs them.
+PLAIN_PATTERNS = frozenset({BLENDER_DEFAULT, LEGACY, PURE})
 
 
 def auto_sample_pattern(scene_pattern: str) -> str | None:
-    """The pattern auto renders a scene whose own is ``scene_pattern`` with: Blender 5's
-    default in place of the legacy one, else None (the scene's own)."""
-    return BLENDER_DEFAULT if scene_pattern == LEGACY else None
+    """The pattern auto renders a scene whose own is ``scene_pattern`` with: the rounded blue
+    noise in place of the legacy pattern or the pure blue noise, else None (the scene's own)."""
+    return ROUND if scene_pattern in PLAIN_PATTERNS else None
+
+
+def needs_debug_options(pattern: str) -> bool:
+    """Whether Cycles renders ``pattern`` only with its debug options on (otherwise it
+    renders the pure blue noise in its place)."""
+    return pattern not in PLAIN_PATTERNS

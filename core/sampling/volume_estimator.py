@@ -105,8 +105,8 @@ class EstimatorChoice:
     ``biased`` None and ``step_rate`` None mean the scene's own settings.
     ``predicted_bias`` is the visible-bias measure at the chosen rate (auto), ``tolerance``
     what the run's samples allow, ``tried`` each rate auto predicted: {rate: measure}.
-    ``sample_pattern``: Cycles' sample pattern auto renders with where the scene carries the
-    legacy one (``core.sampling.sample_pattern``), None for the scene's own.
+    ``sample_pattern``: Cycles' sample pattern auto renders with in place of the scene's
+    legacy or blue-noise one (``core.sampling.sample_pattern``), None for the scene's own.
     """
 
     estimator: str
@@ -151,7 +151,7 @@ class EstimatorChoice:
 
     def describe(self) -> str:
         pattern = "" if self.sample_pattern is None else \
-            f"; sample pattern {self.sample_pattern} (Blender 5's blue noise, not the file's legacy one)"
+            f"; sample pattern {self.sample_pattern} (blue noise, its sequence rounded up to a power of two)"
         pattern += "; denoising guides prefiltered where noisy" if self.prefilter_guides else ""
         if self.biased is None:
             return "the scene's own volume settings" + pattern

@@ -1,0 +1,42 @@
+"""Set the sample pattern auto chose (``core.sampling.sample_pattern``), debug patterns too.
+
+Cycles renders a pattern outside its plain list (Blue-Noise (round), auto's) only where
+Blender's developer interface and Cycles' debug options are both on, and it reads them once,
+when it creates its render session; a session kept by persistent data and created without
+them renders the pure blue noise in the pattern's place, silently. So the options are turned
+on before the run's first render, and where they were off, a session the artist's persistent
+data kept is let go (Blender frees it when persistent data is turned off); ``preserved_scene``
+puts the preferences back when the outermost block ends. The preferences are never saved.
+"""
+from __future__ import annotations
+
+from ...core.sampling.sample_pattern import needs_debug_options
+
+
+def apply_sample_pattern(scene, pattern: str) -> None:
+    """Render ``scene`` with Cycles' sample ``pattern`` (inside ``preserved_scene``)."""
+    if needs_debug_options(pattern):
+        _enable_debug_patterns(scene)
+    scene.cycles.sampling_pattern = pattern
+
+
+def debug_patterns_enabled() -> bool:
+    """Whether a Cycles session created now honours a debug pattern."""
+    import bpy
+
+    preferences = bpy.context.preferences
+    return bool(preferences.view.show_developer_ui and preferences.experimental.use_cycles_debug)
+
+
+def _enable_debug_patterns(scene) -> None:
+    import bpy
+
+    if debug_patterns_enabled():
+        return
+    preferences = bpy.context.preferences
+    preferences.view.show_developer_ui = True
+    preferences.experimental.use_cycles_debug = True
+    if scene.render.use_persistent_data:
+        # A kept session read the options off; turning persistent data off frees it (the
+        # renderer turns it on again), so the next render creates one that reads them on.
+        scene.render.use_persistent_data = False
