@@ -26,7 +26,8 @@ def sobol_friendly(count: int) -> int:
     spp 0.0411 / 0.0455 / 0.0439 / 0.0434 / 0.0393, 32 / 36 / 40 / 44 / 48 spp 0.0307 /
     0.0328 / 0.0311 / 0.0305 / 0.0274; statue 16 / 18 / 20 / 22 / 24 spp 0.0454 / 0.0457 /
     0.0448 / 0.0434 / 0.0421; balls_b 16 / 18 / 20 / 24 spp 0.0521 / 0.0520 / 0.0503 /
-    0.0479. With the blue noise auto renders with (``sample_pattern``; means of 2 seeds):
+    0.0479. With Blender 5's pure blue noise (auto's pattern before it rounded the sequence
+    up, ``sample_pattern``; means of 2 seeds):
     balls_a 16 / 18 / 20 / 22 / 24 / 28 / 32 spp 0.0377 / 0.0476 / 0.0463 / 0.0421 / 0.0373 /
     0.0383 / 0.0274; statue 16 / 20 / 22 / 24 / 32 spp 0.0445 / 0.0439 / 0.0421 / 0.0411 /
     0.0378; balls_b 16 / 20 / 22 spp 0.0505 / 0.0491 / 0.0484; road 0.0400 / 0.0387 /
@@ -34,7 +35,10 @@ def sobol_friendly(count: int) -> int:
     much worse at 18-22; elsewhere 20-23 samples buy 2-6 % of FLIP for 25-45 % more time,
     about what the power of two's own curve gives, so rounding them down costs nothing in
     equal-quality speed. Guided's three columns at mean counts of 35-37 spp measured FLIP
-    0.0308 on balls_a, where 32 in every column gave 0.0274 (``docs/bench_sample_pattern.txt``)."""
+    0.0308 on balls_a, where 32 in every column gave 0.0274 (``docs/bench_sample_pattern.txt``).
+    With the rounded sequence auto renders with now, 20 samples still buy nothing over 16 on
+    balls_a and statue (0.0284 / 0.0407 against 0.0276 / 0.0409; ``docs/bench_round_counts.txt``),
+    so the rounding stays."""
     count = int(count)
     if count < 2:
         return max(count, 1)
@@ -95,7 +99,10 @@ def prefilter_pays(count_plain: int, count_prefiltered: int) -> bool:
     balls_b, statue: 0.92-1.68x, README "Denoising guides in fog"), but with blue noise a
     count just below a power of two renders worse than the power of two below it (balls_a:
     16 spp 0.0377, 18-22 spp 0.0421-0.0476): street's range at uniform 16 spp's time fell
-    from 16 to 12-13 spp a frame for the prefilter's 0.3 s, 1.10x over uniform to 1.00x."""
+    from 16 to 12-13 spp a frame for the prefilter's 0.3 s, 1.10x over uniform to 1.00x.
+    (Measured with the pure blue noise; the rounded sequence auto renders with since narrows
+    that gap, balls_a 12 spp 0.0329 against 16's 0.0276, which this rule has not been
+    measured against.)"""
     if count_prefiltered >= count_plain:
         return True
     return count_plain & (count_plain - 1) != 0
