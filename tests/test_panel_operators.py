@@ -444,7 +444,12 @@ def test_guided_animation_shares_its_time_between_frames(blender, budget_fog, tm
     # At least EARLY (see there): a later frame's count comes
     # from the frame before's cost per sample, and on 2-s frames its error is a few tenths of
     # a second (0.9x failed 1 run in 8, before and after the per-medium steps alike).
-    assert EARLY * 2 * budget <= total <= 1.1 * 2 * budget, done
+    # Beyond the range's 2 x budget only what the floor of half a budget granted the second
+    # frame past what was left (a first frame whose scene sync, outside its budget, took more
+    # than 1.5 budgets: a cold, loaded host took the range to 5.2 s so, with the code before
+    # and after the sample-pattern change alike).
+    granted = max(0.0, done[1].stats.time_budget_s - left)
+    assert EARLY * 2 * budget <= total <= 1.1 * 2 * budget + granted, done
     for entry in done:
         assert oiio.ImageBuf(entry.path).spec().getattribute("xsl_render:mode") == "guided"
     assert job.finish(done).report.startswith("Guided render: 2 frame(s) 1..2")
