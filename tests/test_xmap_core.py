@@ -219,6 +219,23 @@ def test_noise_hash_matches_a_scalar_lookup3(count):
     assert ours.tolist() == expected
 
 
+@pytest.mark.parametrize("count", [1, 2, 3, 4])
+def test_perlin_corner_hashes_in_place_are_hash_uint_bit_for_bit(count):
+    from itertools import product
+
+    from xsl_render.core.media.cycles_noise import _CornerHash
+
+    rng = np.random.default_rng(10 + count)
+    # Cells as Perlin noise has them (int32), with the wrap-around at the extremes.
+    cells = [rng.integers(-2**31, 2**31, size=200).astype(np.int32) for _ in range(count)]
+    cells[0][:2] = (2**31 - 1, -1)
+    corners = _CornerHash(cells)
+    for offsets in product((0, 1), repeat=count):
+        with np.errstate(over="ignore"):
+            expected = hash_uint(*(c + np.int32(o) for c, o in zip(cells, offsets)))
+        assert np.array_equal(corners(offsets), expected)
+
+
 def test_euler_matrix_is_a_rotation():
     m = euler_matrix(np.array([0.3, -1.1, 2.0]))
     assert np.allclose(m @ m.T, np.eye(3), atol=1e-6) and np.linalg.det(m) == pytest.approx(1.0, abs=1e-6)
