@@ -11,6 +11,7 @@ puts the preferences back when the outermost block ends. The preferences are nev
 from __future__ import annotations
 
 from ...core.sampling.sample_pattern import needs_debug_options
+from ..scene.state import DEBUG_PATTERN_PREFERENCES
 
 
 def apply_sample_pattern(scene, pattern: str) -> None:
@@ -25,7 +26,7 @@ def debug_patterns_enabled() -> bool:
     import bpy
 
     preferences = bpy.context.preferences
-    return bool(preferences.view.show_developer_ui and preferences.experimental.use_cycles_debug)
+    return all(getattr(getattr(preferences, path), name) for path, name in DEBUG_PATTERN_PREFERENCES)
 
 
 def _enable_debug_patterns(scene) -> None:
@@ -34,8 +35,8 @@ def _enable_debug_patterns(scene) -> None:
     if debug_patterns_enabled():
         return
     preferences = bpy.context.preferences
-    preferences.view.show_developer_ui = True
-    preferences.experimental.use_cycles_debug = True
+    for path, name in DEBUG_PATTERN_PREFERENCES:
+        setattr(getattr(preferences, path), name, True)
     if scene.render.use_persistent_data:
         # A kept session read the options off; turning persistent data off frees it (the
         # renderer turns it on again), so the next render creates one that reads them on.

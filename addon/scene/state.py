@@ -172,7 +172,7 @@ def preserved_scene(scene):
     volume flags, material override), material slot assignments and object render
     visibility, and the animated values of the scene's frame when the block changed the
     frame; removes datablocks the block created (unless kept). The outermost block also puts
-    back the Blender preferences a debug sample pattern turns on (``_PREFERENCES``).
+    back the Blender preferences a debug sample pattern turns on (``DEBUG_PATTERN_PREFERENCES``).
     """
     import bpy
 
@@ -247,7 +247,7 @@ def _volume_changes(structs: dict, saved: dict) -> set[str]:
 
 #: Blender preferences a block may turn on: (path from ``bpy.context.preferences``, name).
 #: Cycles honours a debug sample pattern only with both (``addon.cycles.sample_pattern``).
-_PREFERENCES = (("view", "show_developer_ui"), ("experimental", "use_cycles_debug"))
+DEBUG_PATTERN_PREFERENCES = (("view", "show_developer_ui"), ("experimental", "use_cycles_debug"))
 
 
 def _preference_values() -> dict:
@@ -255,7 +255,7 @@ def _preference_values() -> dict:
     import bpy
 
     preferences = bpy.context.preferences
-    values = {(path, name): getattr(getattr(preferences, path), name) for path, name in _PREFERENCES}
+    values = {(path, name): getattr(getattr(preferences, path), name) for path, name in DEBUG_PATTERN_PREFERENCES}
     return values | {("", "is_dirty"): preferences.is_dirty}
 
 
