@@ -23,7 +23,7 @@ pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 W, H = 64, 36
 ALL = ("gold", "x_only", "s_only", "xs", "xsl", "xsl_no_minbound", "uniform_eighth", "uniform_quarter",
-       "uniform_half", "uniform_equal_time", "adaptive_equal_time")
+       "uniform_half", "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
 #: A small converged reference keeps the tests quick (the default is 1024 spp).
 REFERENCE = ("--reference-spp", "64")
 TINY = ("--max-spp", "4", "--tile-size", "16", "--no-vdp", "--quiet") + REFERENCE
@@ -96,6 +96,12 @@ def test_results_hold_every_mode_and_metric(experiment):
         assert runs[name]["stats"]["time_budget_s"] == pytest.approx(
             xsl["time_s"] - xsl["stats"]["phases_s"]["denoise"])
         assert runs[name]["stats"]["phases_s"]["denoise"] > 0
+    # Guided's budget covers its denoising too: it gets all of XSL's time, and auto's estimator.
+    guided = runs["guided_equal_time"]["stats"]
+    assert guided["time_budget_s"] == pytest.approx(xsl["time_s"])
+    assert guided["mode"] == "guided" and guided["estimator"]["estimator"] == "auto"
+    assert runs["uniform_equal_time"]["stats"]["estimator"]["estimator"] == "scene"   # the file as it is
+    assert guided["phases_s"]["denoise"] > 0 and 0 < guided["mean_spp"] <= 4      # the ceiling holds
     assert data["scenes"]["fog"]["maps"]["no_minbound"]["minbound"] is False
     lines = result.stdout.strip().splitlines()
     assert lines[0].startswith("fog (64x36, ceiling 4 spp) against a converged reference of 64 spp, seed 7")
@@ -171,7 +177,7 @@ def test_demo_end_to_end(tmp_path):
     assert (out / "report.html").stat().st_size > 10_000
     runs = results(out)["scenes"]["road"]["runs"]
     assert tuple(runs) == ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uniform_half",
-                           "uniform_equal_time", "adaptive_equal_time")
+                           "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
     assert runs["xsl"]["metrics"]["flip"]["mean_flip"] > 0
     assert runs["xsl"]["reference_metrics"]["flip"]["mean_flip"] > 0
     # xsl is placed on the uniform curve (gold and the uniform runs). Its renders of a few

@@ -42,6 +42,7 @@ def test_paper_versions():
     (None, DEFAULT_VARIANTS),
     ("xs", ("gold", "xs")),                                       # gold always comes along
     ("adaptive_equal_time", ("gold", "xsl", "adaptive_equal_time")),  # and the run it times by
+    ("guided_equal_time", ("gold", "xsl", "guided_equal_time")),
     ("xsl, gold ,xs", ("gold", "xs", "xsl")),                     # plan order, spaces ignored
 ])
 def test_parse_variants(text, expected):
@@ -57,7 +58,7 @@ def test_parse_variants_refuses_unknown(text):
 def test_minbound_comparison_only_with_xsl():
     names = [v.name for v in scene_variants(DEFAULT_VARIANTS, compare_minbound=True)]
     assert names.index("xsl_no_minbound") == names.index("xsl") + 1
-    assert names[0] == "gold" and names[-2:] == ["uniform_equal_time", "adaptive_equal_time"]
+    assert names[0] == "gold" and names[-3:] == ["uniform_equal_time", "adaptive_equal_time", "guided_equal_time"]
     assert "xsl_no_minbound" not in [v.name for v in scene_variants(DEFAULT_VARIANTS)]
     assert [v.name for v in scene_variants(("gold", "xs"), compare_minbound=True)] == ["gold", "xs"]
 
@@ -119,6 +120,9 @@ def test_timing_chart_bars_scale_with_time():
     assert 'width="420.00"' in svg                       # the longest bar fills the axis
     assert 'width="42.00"' in svg and 'width="168.00"' in svg   # maps 1 s, render 4 s
     assert "xsl &lt;&amp;&gt;" in svg                    # labels are escaped
+    assert "guided render" not in svg                   # its legend entry only with a guided bar
+    guided = timing_chart_svg([Bar("gold", 0.0, 10.0, "gold"), Bar("guided", 0.0, 8.0, "guided")], "t")
+    assert "guided render" in guided and 'fill="#2a9d8f"' in guided
 
 
 def test_resolve_scenes(tmp_path):

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ...core.files import write_json
@@ -21,6 +21,7 @@ from ...core.maps.director import xs_map, xsl_map
 from ...core.maps.files import read_map_set, write_map_set
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback, WeightedSteps
+from ...core.sampling.guided_plan import GuidedOptions
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_request import RenderRequest
 from ...core.sampling.render_stats import RenderStats
@@ -33,7 +34,7 @@ from ...core.validation.store import file_sha256, inputs_hash, read_record, writ
 from ...core.validation.vdp import vdp_unavailable_reason
 
 #: Relative cost of each step, in gold renders, for the overall progress fraction.
-STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4,
+STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4, "guided": 0.4,
                 "metrics": 0.1}
 
 
@@ -196,10 +197,12 @@ class _SceneRun:
         if variant.kind == "selective":
             inputs["maps_hash"] = self.maps[variant.map_options.minbound][1]
         if variant.equal_time:
-            # XSL's wall time, maps included, without its denoising pass: the baseline's
-            # time limit covers its rendering, and its own denoising pass comes on top.
+            # XSL's wall time, maps included. A baseline's time limit covers its rendering, so
+            # it gets it without XSL's denoising pass and pays its own on top; guided's budget
+            # covers its whole run, its denoising too, so it gets all of it.
             source = self.records[EQUAL_TIME_SOURCE]
-            inputs["budget_s"] = RenderStats.from_json(source["stats"]).render_seconds
+            timed = RenderStats.from_json(source["stats"])
+            inputs["budget_s"] = timed.wall_s if variant.kind == "guided" else timed.render_seconds
             inputs["budget_from_hash"] = source["input_hash"]
         return inputs
 
@@ -207,13 +210,19 @@ class _SceneRun:
     def request(variant: Variant, options: RenderOptions, inputs: dict) -> RenderRequest:
         """The render request of a variant: the gold standard, a selective render from its
         director map (its stats named after the variant), uniform at a share of the ceiling
-        or at XSL's time, or Cycles' adaptive sampling at XSL's time."""
+        or at XSL's time, Cycles' adaptive sampling at XSL's time, or guided in XSL's time
+        with auto's estimator (as ``render --mode guided`` does by default), the ceiling
+        every run has."""
         if variant.kind == "gold":
             return RenderRequest("gold", options)
         if variant.kind == "selective":
             return RenderRequest(variant.director, options, label=variant.name)
         if variant.kind == "uniform" and variant.spp_fraction is not None:
             return RenderRequest("uniform", options, spp=variant.spp(options.max_spp))
+        if variant.kind == "guided":
+            return RenderRequest("guided", replace(options, estimator="auto"),
+                                 guided=GuidedOptions(time_budget=float(inputs["budget_s"])),
+                                 map_options=MapOptions())
         return RenderRequest(variant.kind, options, seconds=inputs["budget_s"])
 
     def render(self, variant: Variant) -> dict:

@@ -7,8 +7,10 @@ ceiling of samples in every pixel, the runs' own seed). The paper's versions are
 alone, XS(1, 0, +), the saliency map alone, XS(0, 1, +), the XS map and, for the road scene,
 the XSL map with and without MinBound. Ours add uniform sampling at 1/8, 1/4 and 1/2 of the
 ceiling (with the gold standard, a uniform time-quality curve to read equal-quality speedups
-along) and two renders that cost the same wall time as the XSL run (maps included): uniform
-sampling and Cycles' own adaptive sampling, what a Blender user would do instead.
+along) and three renders that cost the same wall time as the XSL run (maps included): uniform
+sampling and Cycles' own adaptive sampling, what a Blender user would do instead, and this
+project's own ``guided`` mode with ``--estimator auto`` (the volume estimator and pattern
+chosen per scene), what it offers instead of the paper's maps.
 """
 from __future__ import annotations
 
@@ -31,7 +33,7 @@ class Variant:
     ----------
     name : file stem and key in results.json.
     label : what the report calls it (the paper's notation where it has one).
-    kind : "gold", "selective", "uniform" or "adaptive".
+    kind : "gold", "selective", "uniform", "adaptive" or "guided".
     director : for selective runs, "xs" or "xsl": which combination of the maps directs it.
     map_options : the weights and operators of that combination and whether X uses MinBound.
     spp_fraction : for a uniform run with samples of its own, the fraction of the ceiling it
@@ -47,7 +49,7 @@ class Variant:
 
     @property
     def equal_time(self) -> bool:
-        return self.kind in ("uniform", "adaptive") and self.spp_fraction is None
+        return self.kind in EQUAL_TIME_KINDS and self.spp_fraction is None
 
     def spp(self, ceiling: int) -> int:
         """Samples per pixel of a uniform run with ``spp_fraction`` (at least 1)."""
@@ -60,6 +62,9 @@ class Variant:
             data["spp_fraction"] = self.spp_fraction
         return data
 
+
+#: Kinds of run given the XSL run's wall time (uniform and adaptive without samples of their own).
+EQUAL_TIME_KINDS = ("uniform", "adaptive", "guided")
 
 _PAPER = MapOptions()
 VARIANTS = {
@@ -76,11 +81,12 @@ VARIANTS = {
         Variant("uniform_half", "Uniform, 1/2 of the ceiling", "uniform", spp_fraction=1 / 2),
         Variant("uniform_equal_time", "Uniform, XSL's time", "uniform"),
         Variant("adaptive_equal_time", "Cycles adaptive, XSL's time", "adaptive"),
+        Variant("guided_equal_time", "Guided (auto), XSL's time", "guided"),
     )
 }
 #: Every variant but the MinBound comparison, which only some scenes get.
 DEFAULT_VARIANTS = ("gold", "x_only", "s_only", "xs", "xsl", "uniform_eighth", "uniform_quarter",
-                    "uniform_half", "uniform_equal_time", "adaptive_equal_time")
+                    "uniform_half", "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
 #: The uniform runs with samples of their own: with gold, the uniform time-quality curve.
 UNIFORM_CURVE_VARIANTS = ("uniform_eighth", "uniform_quarter", "uniform_half")
 #: Scenes that also get XSL without MinBound (the paper's road scene, the one with sky).

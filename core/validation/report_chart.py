@@ -7,7 +7,11 @@ import math
 from dataclasses import dataclass
 from html import escape
 
-COLOURS = {"gold": "#6b6b6b", "maps": "#d9a441", "render": "#3b6ea5", "equal": "#8a5fb0"}
+COLOURS = {"gold": "#6b6b6b", "maps": "#d9a441", "render": "#3b6ea5", "equal": "#8a5fb0",
+           "guided": "#2a9d8f"}
+#: The legend's entries; "guided" only where a guided run is drawn.
+_LEGEND = (("gold", "gold standard"), ("maps", "maps"), ("render", "selective render"),
+           ("equal", "equal-time render"), ("guided", "guided render"))
 _ROW = 26
 _LABEL_W = 210
 _BAR_W = 420
@@ -57,8 +61,10 @@ def timing_chart_svg(bars: list[Bar], title: str = "") -> str:
         parts.append(f'<text x="{_LABEL_W + maps_w + render_w + 6:.2f}" y="{y + 15}">{escape(value)}</text>')
     legend_y = 6 + len(bars) * _ROW + 14
     x = _LABEL_W
-    for key, text in (("gold", "gold standard"), ("maps", "maps"), ("render", "selective render"),
-                      ("equal", "equal-time render")):
+    drawn = {bar.kind for bar in bars}
+    for key, text in _LEGEND:
+        if key == "guided" and key not in drawn:
+            continue
         parts.append(f'<rect x="{x}" y="{legend_y}" width="12" height="12" fill="{COLOURS[key]}"/>')
         parts.append(f'<text x="{x + 16}" y="{legend_y + 11}">{text}</text>')
         x += 24 + 7 * len(text)

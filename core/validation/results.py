@@ -18,7 +18,8 @@ from .curves_results import metric_values
 #: Statistics of a render copied into results.json (the rest stays in the run's record).
 _STATS_KEPT = ("mode", "resolution", "max_spp", "seed", "wall_s", "phases_s", "total_samples",
                "mean_spp", "gold_samples", "renders", "ideal_speedup", "director_map_mean",
-               "time_budget_s", "time_limit_s", "stopped_by_time", "noise_threshold", "warnings")
+               "time_budget_s", "time_limit_s", "stopped_by_time", "noise_threshold", "estimator",
+               "warnings")
 
 
 def run_summary(variant, record: dict, gold: dict, reused: bool) -> dict:

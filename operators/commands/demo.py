@@ -1,13 +1,14 @@
 """``xsl-render demo``: the main job on the bundled road scene (the paper's Fig. 7 and its
 second experiment): director maps, the XSL and XS renders, the gold standard, uniform at 1/8,
 1/4 and 1/2 of the ceiling (with gold, the uniform time-quality curve), uniform and Cycles
-adaptive sampling at XSL's wall time; MSE / FLIP / VDP against the converged reference (the
+adaptive sampling at XSL's wall time, and this project's own ``guided`` mode (auto's volume
+estimator, the default of ``render --mode guided``) in the same time; MSE / FLIP / VDP against the converged reference (the
 road's is shipped with the repository, example_blends/references/) with each run's
 equal-quality speedup over uniform, and the paper's Tables I-II against the gold standard;
 the HTML report, whose path is printed last.
 
 Default: the scene's own 512x288 at the example scenes' ceiling of 64 samples per pixel,
-about a minute and a half on two CPU cores. Why not the paper's 16: at 16 spp the gold
+about three minutes on two CPU cores. Why not the paper's 16: at 16 spp the gold
 standard renders in about 4 s here, and the fixed costs of the selective render (the maps'
 snapshot, the denoiser, one Cycles render per rectangle) eat what the saved samples gain,
 which says more about a fast Cycles than about the method. ``--full`` renders every version
@@ -25,10 +26,10 @@ from .experiment import add_quality_arguments, run_and_report
 
 NAME = "demo"
 HELP = ("the main job: maps, XSL and gold renders of the bundled road scene, comparison, and an "
-        "HTML report (64 spp, about a minute and a half; --full: every version at 16 and 64 spp)")
+        "HTML report (64 spp, about three minutes; --full: every version at 16 and 64 spp)")
 SCENE = "road"
 QUICK_VARIANTS = ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uniform_half",
-                  "uniform_equal_time", "adaptive_equal_time")
+                  "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
 #: The example scenes' own ceiling (the default), and the ceilings of --full: the paper's 16 too.
 DEFAULT_CEILING = 64
 FULL_CEILINGS = (16, 64)
@@ -72,7 +73,7 @@ def run(args) -> int:
     jobs = [SceneJob(name if len(ceilings) == 1 else f"{name}_{spp}spp", path, max_spp=spp,
                      compare_minbound=args.full) for spp in ceilings]
     what = ("every version" if args.full
-            else "gold, XS, XSL, uniform at 1/8-1/2 of the ceiling, uniform and adaptive at XSL's time")
+            else "gold, XS, XSL, uniform at 1/8-1/2 of the ceiling, uniform, adaptive and guided at XSL's time")
     size = args.resolution or "the scene's own size"
     print(f"demo: {name}.blend at {size}, {' and '.join(map(str, ceilings))} spp: maps, {what}, "
           f"MSE/FLIP/VDP against the converged reference, report in {out}", file=sys.stderr)
