@@ -22,13 +22,16 @@ def test_a_range_raises_its_count_to_the_power_of_two_its_allowance_reaches(coun
     assert power_of_two_within(count, reach, ceiling) == expected
 
 
-@pytest.mark.parametrize("first, affordable, count", [
-    (16, 16, 16), (16, 14, 16), (16, 13, 13),     # held down to 85 % of the first column's count
-    (16, 31, 16), (16, 32, 32), (16, 47, 32),     # and up to (not including) twice it
-    (8, 5, 4), (12, 12, 12), (12, 30, 30), (1, 1, 1), (1, 3, 3), (16, 11, 8),
+@pytest.mark.parametrize("held, affordable, frame, count", [
+    (16, 16, 16, 16), (16, 14, 16, 16), (16, 13, 16, 13),   # held down to 85 % of the count before
+    (16, 31, 31, 16), (16, 32, 32, 32), (16, 47, 40, 32),   # raised at twice it, where the frame
+    (16, 32, 21, 16), (16, 47, 23.5, 16),                   # affords it too: not the slack of a
+    (4, 29, 18, 16), (4, 20, 20, 16),                       # rounding down; to the frame's count
+    (8, 5, 8, 4), (12, 12, 12, 12), (12, 30, 30, 30), (1, 1, 1, 1), (1, 3, 3, 3), (16, 11, 16, 8),
 ])
-def test_later_columns_of_a_flat_pass_keep_the_first_ones_count_while_the_clock_allows(first, affordable, count):
-    assert column_count(first, affordable) == count
+def test_later_columns_of_a_flat_pass_hold_one_count_unless_the_whole_frame_affords_twice_it(
+        held, affordable, frame, count):
+    assert column_count(held, affordable, frame) == count
 
 
 @pytest.mark.parametrize("affordable, allowance, ceiling, count", [

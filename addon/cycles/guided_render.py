@@ -385,7 +385,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                                     side_by_side=final.flat)
                 began, rendered_s, rendered_samples = clock.now(), 0.0, 0
                 rendered_rects = []
-                first_column = None
+                held = None
+                final_seconds = max(0.0, left)
                 for index, rect in enumerate(rects):
                     paused = clock.pause()
                     yield 0.2 + 0.75 * index / max(1, len(rects)), f"guided: rectangle {index + 1}/{len(rects)}"
@@ -400,10 +401,13 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                         # (no frame before: a fresh count, raised as the allowance allows).
                         spp = pace.steady_count(spp, options.max_spp, rate * width * height)
                     elif final.flat:
-                        # One count for the whole frame while the clock allows (``column_count``).
-                        spp = (first_column_count(spp, frame_sample_s) if first_column is None
-                               else column_count(first_column, spp))
-                        first_column = first_column or spp
+                        # One count for the whole frame while the clock allows, raised only
+                        # where the whole frame affords it at the cost the columns measured
+                        # (``column_count``).
+                        frame_affordable = final_seconds / (frame_sample_s * pacer.cost_ratio)
+                        spp = (first_column_count(spp, frame_sample_s) if held is None
+                               else column_count(held, spp, frame_affordable))
+                        held = spp
                     seconds = keep(rect.window, renderer.render(rect.window, spp), spp)
                     pacer.record(seconds, rate * spp * rect.area)
                     rendered_s += seconds

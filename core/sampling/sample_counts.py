@@ -54,20 +54,38 @@ def sobol_friendly(count: int) -> int:
 HOLD_RANGE = (0.85, 1.3)
 
 
-def column_count(first: int, affordable: int) -> int:
-    """The count of a flat pass's later column: the first column's while the column affords
-    from ``HOLD_RANGE[0]`` of it to less than twice it, else ``sobol_friendly(affordable)``.
+def column_count(held: int, affordable: float, frame_affordable: float) -> int:
+    """The count of a flat pass's later column: ``held`` (the count of the columns before it)
+    while the column affords at least ``HOLD_RANGE[0]`` of it, raised only where the whole
+    frame affords twice it too, else ``sobol_friendly(affordable)``.
+
+    ``affordable``: the column's count by the clock (the time left over the columns left);
+    ``frame_affordable``: the count the whole final pass would have afforded at the cost per
+    sample its finished columns measured. A column affords twice the count before it in two
+    ways. Either the first column was priced too dear (a pilot off by 2x or more; balls_b's
+    columns came out 4 / 16 / 29): then the frame affords it too, and the columns after it
+    take the frame's count, ``sobol_friendly(min(affordable, frame_affordable))``. Or the
+    columns before it were rounded down (``sobol_friendly``: 20 affordable, 16 rendered) and
+    their slack all fell to the last column (road at 14.1 s: 16 / 16 / 32, 14.4 s): then
+    the frame does not, and the column holds. Road at a 14.1-s budget (2026-11-28): raised,
+    16 / 16 / 32 spp in 14.4 s, mean FLIP 0.0384, p95 region FLIP 0.0642, MSE 4.69e-5; held,
+    16 / 16 / 16 in 10.8-12.2 s (5 runs), 0.0400, 0.0642, 4.72e-5. The raise bought 4 % of mean
+    FLIP and nothing else for a quarter more time, less than uniform sampling gains in it (on
+    the demo's uniform curve 1.00x against 1.11x at equal mean FLIP), and left the frame
+    uneven; held, the frame ends early.
 
     One frame at one count: the pilot's timing is noisy at small budgets (a quarter-resolution
     render of a few samples in ~0.07 s), and the columns paced after a misjudged first one
     came out uneven, which scored worse than their mean count (balls_a at uniform 16 spp's
     time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp, mean FLIP 0.0564 / 0.0445 /
-    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the first column's
-    count beyond what a column affords by the clock (the budget's 15 %) or leaves a column
-    short of twice it unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
-    if HOLD_RANGE[0] * first <= affordable < 2 * first:
-        return first
-    return sobol_friendly(affordable)
+    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the held count beyond
+    what a column affords by the clock (the budget's 15 %) or leaves what the rounding down
+    saved unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
+    if affordable < HOLD_RANGE[0] * held:
+        return sobol_friendly(int(affordable))
+    if affordable >= 2 * held and frame_affordable >= 2 * held:
+        return max(held, sobol_friendly(int(min(affordable, frame_affordable))))
+    return held
 
 
 #: A guided run may end this share over its budget to render at the power of two above its
