@@ -30,8 +30,9 @@
    what those before it cost at full resolution (a quarter-resolution pilot's renders of a
    few tens of milliseconds misjudge a full frame's cost per pixel by up to 2x, either way:
    their timing noise); the
-   later columns keep the first one's count while the clock allows (``column_count``: one
-   count per frame), and a count up to 1.5x a power of two renders at it
+   later columns keep the count before them while the clock allows, raised only where the
+   whole frame affords twice it (``column_count``: one count per frame), and a count up to
+   1.5x a power of two renders at it
    (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
    of the whole frame stopped by Cycles' own time limit instead of the columns was measured
    on the four example scenes, medians of 3: a tie, 0.87x of auto's uniform curve on mean
