@@ -55,9 +55,9 @@ HOLD_RANGE = (0.85, 1.3)
 
 
 def column_count(held: int, affordable: float, frame_affordable: float) -> int:
-    """The count of a flat pass's later column: ``held`` (the count of the columns before it)
-    while the column affords at least ``HOLD_RANGE[0]`` of it, raised only where the whole
-    frame affords twice it too, else ``sobol_friendly(affordable)``.
+    """The count of a flat pass's later column: ``held`` (the count of the columns before it);
+    ``sobol_friendly(affordable)`` where the column affords less than ``HOLD_RANGE[0]`` of it;
+    more only where the column and the whole frame both afford twice it.
 
     ``affordable``: the column's count by the clock (the time left over the columns left);
     ``frame_affordable``: the count the whole final pass would have afforded at the cost per
