@@ -24,35 +24,33 @@ _NOISE_SCALE = {1: F32(0.25), 2: F32(0.6616), 3: F32(0.9820), 4: F32(0.8344)}
 # ---------------------------------------------------------------------------------------
 # Jenkins lookup3 hash (uint32 arithmetic wraps in numpy as it does in C)
 
-def _rot(x, k):
-    return (x << np.uint32(k)) | (x >> np.uint32(32 - k))
+def _rot_into(x, k, out, spare):
+    """``out`` = rot(x, k), using ``spare``."""
+    np.left_shift(x, np.uint32(k), out=out)
+    np.right_shift(x, np.uint32(32 - k), out=spare)
+    np.bitwise_or(out, spare, out=out)
 
 
-def _final(a, b, c):
-    c = (c ^ b) - _rot(b, 14)
-    a = (a ^ c) - _rot(c, 11)
-    b = (b ^ a) - _rot(a, 25)
-    c = (c ^ b) - _rot(b, 16)
-    a = (a ^ c) - _rot(c, 4)
-    b = (b ^ a) - _rot(a, 14)
-    c = (c ^ b) - _rot(b, 24)
-    return c
+def _final(a, b, c, scratch):
+    """lookup3's ``final``, in place in ``a``, ``b``, ``c`` (its result in ``c``); ``scratch``: two
+    arrays of their shape."""
+    rot, spare = scratch
+    for x, y, k in ((c, b, 14), (a, c, 11), (b, a, 25), (c, b, 16), (a, c, 4), (b, a, 14), (c, b, 24)):
+        np.bitwise_xor(x, y, out=x)
+        _rot_into(y, k, rot, spare)
+        np.subtract(x, rot, out=x)
 
 
-def _mix(a, b, c):
-    a = (a - c) ^ _rot(c, 4)
-    c = c + b
-    b = (b - a) ^ _rot(a, 6)
-    a = a + c
-    c = (c - b) ^ _rot(b, 8)
-    b = b + a
-    a = (a - c) ^ _rot(c, 16)
-    c = c + b
-    b = (b - a) ^ _rot(a, 19)
-    a = a + c
-    c = (c - b) ^ _rot(b, 4)
-    b = b + a
-    return a, b, c
+def _mix(a, b, c, scratch):
+    """lookup3's ``mix``, in place."""
+    rot, spare = scratch
+    for x, y, z, k in ((a, b, c, 4), (b, c, a, 6), (c, a, b, 8), (a, b, c, 16), (b, c, a, 19),
+                       (c, a, b, 4)):
+        # x = (x - z) ^ rot(z, k); z = z + y  (lookup3's mix, line pair by line pair)
+        np.subtract(x, z, out=x)
+        _rot_into(z, k, rot, spare)
+        np.bitwise_xor(x, rot, out=x)
+        np.add(z, y, out=z)
 
 
 def _u32(x):
@@ -62,31 +60,29 @@ def _u32(x):
     return x.astype(np.int64).astype(np.uint32)
 
 
+def _hash_init(n: int) -> np.uint32:
+    """lookup3's starting value of a, b and c for ``n`` 32-bit keys."""
+    return np.uint32((0xDEADBEEF + (n << 2) + 13) & 0xFFFFFFFF)
+
+
 def hash_uint(*keys) -> np.ndarray:
     """Cycles' ``hash_uint``..``hash_uint4`` of 1 to 4 unsigned integer arrays."""
     n = len(keys)
+    if not 1 <= n <= 4:
+        raise ValueError("hash_uint takes 1 to 4 keys")
     keys = [_u32(k) for k in keys]
     with np.errstate(over="ignore"):
-        init = np.uint32((0xDEADBEEF + (n << 2) + 13) & 0xFFFFFFFF)
+        init = _hash_init(n)
         shape = np.broadcast_shapes(*(k.shape for k in keys))
-        a = np.full(shape, init, dtype=np.uint32)
-        b, c = a.copy(), a.copy()
-        if n == 1:
-            a = a + keys[0]
-        elif n == 2:
-            b = b + keys[1]
-            a = a + keys[0]
-        elif n == 3:
-            c = c + keys[2]
-            b = b + keys[1]
-            a = a + keys[0]
-        elif n == 4:
-            a, b, c = a + keys[0], b + keys[1], c + keys[2]
-            a, b, c = _mix(a, b, c)
-            a = a + keys[3]
-        else:
-            raise ValueError("hash_uint takes 1 to 4 keys")
-        return _final(a, b, c)
+        a, b, c = (np.full(shape, init, dtype=np.uint32) for _ in range(3))
+        for target, key in zip((a, b, c), keys[:3]):
+            np.add(target, key, out=target)
+        scratch = (np.empty(shape, np.uint32), np.empty(shape, np.uint32))
+        if n == 4:
+            _mix(a, b, c, scratch)
+            np.add(a, keys[3], out=a)
+        _final(a, b, c, scratch)
+        return c
 
 
 def hash_float_to_float(*values) -> np.ndarray:
@@ -186,7 +182,7 @@ class _CornerHash:
     """``hash_uint`` of a Perlin cell's corners (the cell's integer coordinates plus 0 or 1
     per axis), computed in place in buffers kept across the corners.
 
-    The same arithmetic as ``hash_uint``, bit for bit; it allocates no array per operation:
+    ``hash_uint``'s arithmetic (``_mix``, ``_final``), without a new array per corner:
     a frame's noise is millions of points, where fresh arrays of that size each cost page
     faults on top of the integer operations (3-D fbm of 180k points took 1.55x as long with
     them, and the 3-D gradients' temporaries, now gone too, a share of that; medians of 7).
@@ -194,7 +190,7 @@ class _CornerHash:
 
     def __init__(self, cells):
         n = len(cells)
-        init = np.uint32((0xDEADBEEF + (n << 2) + 13) & 0xFFFFFFFF)
+        init = _hash_init(n)
         shape = np.broadcast_shapes(*(np.shape(c) for c in cells))
         with np.errstate(over="ignore"):
             # Each key with the hash's initial value added (a, b, c start from it).
@@ -212,46 +208,18 @@ class _CornerHash:
             starts = [np.add(bases[k], np.uint32(offsets[k])) if offsets[k] else bases[k]
                       for k in range(n)]
             for target, k in ((a, 0), (b, 1), (c, 2)):
-                if k < n and k < 3:
+                if k < n:
                     np.copyto(target, starts[k])
                 else:
                     target.fill(self.init)
             if n == 4:
-                _mix_inplace(a, b, c, self.scratch)
+                _mix(a, b, c, self.scratch)
                 np.add(a, starts[3], out=a)
                 # keys[3] went in after the mix; the initial value it carries in ``bases``
                 # must not: hash_uint4 adds the bare key.
                 np.subtract(a, self.init, out=a)
-            _final_inplace(a, b, c, self.scratch)
+            _final(a, b, c, self.scratch)
             return c.copy()
-
-
-def _rot_into(x, k, out, spare):
-    """``out`` = rot(x, k), using ``spare``."""
-    np.left_shift(x, np.uint32(k), out=out)
-    np.right_shift(x, np.uint32(32 - k), out=spare)
-    np.bitwise_or(out, spare, out=out)
-
-
-def _final_inplace(a, b, c, scratch):
-    """``_final`` in place (its result in ``c``)."""
-    rot, spare = scratch
-    for x, y, k in ((c, b, 14), (a, c, 11), (b, a, 25), (c, b, 16), (a, c, 4), (b, a, 14), (c, b, 24)):
-        np.bitwise_xor(x, y, out=x)
-        _rot_into(y, k, rot, spare)
-        np.subtract(x, rot, out=x)
-
-
-def _mix_inplace(a, b, c, scratch):
-    """``_mix`` in place."""
-    rot, spare = scratch
-    for x, y, z, k in ((a, b, c, 4), (b, c, a, 6), (c, a, b, 8), (a, b, c, 16), (b, c, a, 19),
-                       (c, a, b, 4)):
-        # x = (x - z) ^ rot(z, k); z = z + y  (the pattern of every line pair of _mix)
-        np.subtract(x, z, out=x)
-        _rot_into(z, k, rot, spare)
-        np.bitwise_xor(x, rot, out=x)
-        np.add(z, y, out=z)
 
 
 def snoise(p: np.ndarray) -> np.ndarray:
