@@ -27,6 +27,7 @@ def test_a_range_raises_its_count_to_the_power_of_two_its_allowance_reaches(coun
     (16, 31, 31, 16), (16, 32, 32, 32), (16, 47, 40, 32),   # raised at twice it, where the frame
     (16, 32, 21, 16), (16, 47, 23.5, 16),                   # affords it too: not the slack of a
     (4, 29, 18, 16), (4, 20, 20, 16),                       # rounding down; to the frame's count
+    (16, 40, 25, 25), (16, 40, 23, 16),                     # the frame past 1.5x it: priced too dear
     (8, 5, 8, 4), (12, 12, 12, 12), (12, 30, 30, 30), (1, 1, 1, 1), (1, 3, 3, 3), (16, 11, 16, 8),
 ])
 def test_later_columns_of_a_flat_pass_hold_one_count_unless_the_whole_frame_affords_twice_it(

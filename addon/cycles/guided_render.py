@@ -31,7 +31,8 @@
    few tens of milliseconds misjudge a full frame's cost per pixel by up to 2x, either way:
    their timing noise); the
    later columns keep the count before them while the clock allows, raised only where the
-   whole frame affords twice it (``column_count``: one count per frame), and a count up to
+   whole frame affords more than a rounding down to it leaves (``column_count``: one count
+   per frame), and a count up to
    1.5x a power of two renders at it
    (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
    of the whole frame stopped by Cycles' own time limit instead of the columns was measured

@@ -57,14 +57,16 @@ HOLD_RANGE = (0.85, 1.3)
 def column_count(held: int, affordable: float, frame_affordable: float) -> int:
     """The count of a flat pass's later column: ``held`` (the count of the columns before it);
     ``sobol_friendly(affordable)`` where the column affords less than ``HOLD_RANGE[0]`` of it;
-    more only where the column and the whole frame both afford twice it.
+    more only where the column affords twice it and the whole frame ``POWER_OF_TWO_SLACK``
+    times it (more than a rounding down to ``held`` leaves).
 
     ``affordable``: the column's count by the clock (the time left over the columns left);
     ``frame_affordable``: the count the whole final pass would have afforded at the cost per
     sample its finished columns measured. A column affords twice the count before it in two
-    ways. Either the first column was priced too dear (a pilot off by 2x or more; balls_b's
-    columns came out 4 / 16 / 29): then the frame affords it too, and the columns after it
-    take the frame's count, ``sobol_friendly(min(affordable, frame_affordable))``. Or the
+    ways. Either the first column was priced too dear (balls_b's columns came out 4 / 16 / 29):
+    then the frame affords more than ``sobol_friendly`` would have rounded down to it, and the
+    columns after it take the frame's count, ``sobol_friendly(min(affordable,
+    frame_affordable))`` (holding there instead left a 4-s test run at 62 % of its budget). Or the
     columns before it were rounded down (``sobol_friendly``: 20 affordable, 16 rendered) and
     their slack all fell to the last column (road at 14.1 s: 16 / 16 / 32, 14.4 s): then
     the frame does not, and the column holds. Road at a 14.1-s budget (2026-11-28): raised,
@@ -83,7 +85,7 @@ def column_count(held: int, affordable: float, frame_affordable: float) -> int:
     saved unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
     if affordable < HOLD_RANGE[0] * held:
         return sobol_friendly(int(affordable))
-    if affordable >= 2 * held and frame_affordable >= 2 * held:
+    if affordable >= 2 * held and frame_affordable >= POWER_OF_TWO_SLACK * held:
         return max(held, sobol_friendly(int(min(affordable, frame_affordable))))
     return held
 
