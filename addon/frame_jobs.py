@@ -26,7 +26,7 @@ from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.render_stats import FrameMaps
 from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
-from .cycles.tile_render import forget_synced_volumes
+from .cycles.tile_render import forget_synced_session
 from .maps.director_maps import map_steps, named_map_steps
 from .maps.estimator_choice import with_estimator_choice
 from .scene.state import preserved_scene
@@ -68,7 +68,7 @@ class FrameJob:
     share: float = 0.0
 
     def __call__(self, scene) -> Steps[FrameResult]:
-        forget_synced_volumes()
+        forget_synced_session()
         prepared = None
         if self.prepare is not None:
             prepared = yield from scaled_steps(self.prepare(scene), 0.0, self.share)
@@ -98,7 +98,7 @@ def frames_steps(scene, frames: Sequence[int], job: FrameJob,
     frames = list(frames)
     done = []
     count = len(frames)
-    forget_synced_volumes()
+    forget_synced_session()
     chunk = max(1, ahead) if job.prepare is not None else 1
     with preserved_scene(scene):
         scene.render.use_persistent_data = True

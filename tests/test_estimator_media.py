@@ -202,14 +202,14 @@ def test_a_materials_step_rate_reaches_cycles_and_multiplies_the_scene_rate(blen
     """In one persistent session a material's new step rate renders (it needs the material's
     own tag), and material rate 4 at scene rate 1 renders the same pixels as the reverse:
     on a scene with one marched medium, a sweep of material rates is the scene-rate sweep."""
-    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_volumes
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
     from xsl_render.addon.scene.state import preserved_scene, settings_dump
 
     scene = _two_media_scene(blender)
     scene.render.resolution_x, scene.render.resolution_y = W, H
     media = [blender.data.materials["noise fog"], blender.data.materials["smoke"]]
     before = settings_dump(scene)
-    forget_synced_volumes()
+    forget_synced_session()
     with preserved_scene(scene):
         scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, 1.0
         with CyclesWindowRenderer(scene, 0) as renderer:

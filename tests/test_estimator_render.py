@@ -135,12 +135,12 @@ def test_a_changed_estimator_reaches_cycles_in_one_persistent_session(blender):
     differ from what it synced last (and only then: the same settings render bit-identically)."""
     from test_ray_marching import _two_media_scene
 
-    from xsl_render.addon.cycles.tile_render import forget_synced_volumes
+    from xsl_render.addon.cycles.tile_render import forget_synced_session
     from xsl_render.addon.scene.state import preserved_scene
 
     scene = _two_media_scene(blender)
     scene.render.resolution_x, scene.render.resolution_y = W, H
-    forget_synced_volumes()
+    forget_synced_session()
     with preserved_scene(scene):
         scene.cycles.volume_biased, scene.cycles.volume_step_rate = True, 4.0
         with CyclesWindowRenderer(scene, 0) as renderer:

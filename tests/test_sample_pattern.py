@@ -133,11 +133,11 @@ def test_a_new_pattern_reaches_cycles_in_one_persistent_session_and_the_artists_
     from support.artist_render import artists_f12
     from support.fog_scene import build_fog_scene
 
-    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_volumes
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
     from xsl_render.addon.scene.state import preserved_scene
 
     scene = build_fog_scene(blender, W, H)
-    forget_synced_volumes()
+    forget_synced_session()
     with preserved_scene(scene):
         scene.cycles.sampling_pattern = LEGACY
         with CyclesWindowRenderer(scene, 0) as renderer:

@@ -230,11 +230,12 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 return prefilter_reserve, True
             return reserve, False
 
-        def first_column_count(affordable: float, frame_sample_s: float) -> int:
+        def first_column_count(affordable: float, frame_sample_s: float, sequence: int) -> int:
             """A still's count (its first column's): raised to the power of two above it where
-            ``BUDGET_OVERRUN`` of the budget reaches."""
+            ``BUDGET_OVERRUN`` of the budget reaches; ``sequence``: the session's
+            (``CyclesWindowRenderer.sequence``)."""
             return still_count(affordable, BUDGET_OVERRUN * guided.time_budget / frame_sample_s,
-                               options.max_spp)
+                               options.max_spp, sequence)
 
         def sync(renderer) -> None:
             """A 1-sample render of a few pixels: Cycles syncs the scene."""
@@ -291,7 +292,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 def steady(denoise_s: float) -> int:
                     left = budget - clock.now() - denoise_s - _RENDER_OVERHEAD_S
                     return pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp,
-                                             rate * width * height)
+                                             rate * width * height, renderer.sequence())
 
                 # Noisy unless the frame before measured its guides clean.
                 denoise_reserve, allow_prefilter = denoise_plan(steady, pace.guides_noisy is not False)
@@ -359,8 +360,8 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 def first_count(denoise_s: float) -> int:
                     affordable = max(0.0, budget - clock.now() - denoise_s) / frame_sample_s
                     if range_start:
-                        return pace.steady_count(affordable, options.max_spp, frame_sample_s)
-                    return first_column_count(affordable, frame_sample_s)
+                        return pace.steady_count(affordable, options.max_spp, frame_sample_s, renderer.sequence())
+                    return first_column_count(affordable, frame_sample_s, renderer.sequence())
 
                 pilot_noisy = (may_prefilter and pilot.guides is not None
                                and guides_are_noisy(pilot.guides[..., :3]))
@@ -401,14 +402,16 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     if final.flat and range_start:
                         # A range's first frame (one render): the count its frames can hold
                         # (no frame before: a fresh count, raised as the allowance allows).
-                        spp = pace.steady_count(spp, options.max_spp, rate * width * height)
+                        spp = pace.steady_count(spp, options.max_spp, rate * width * height, renderer.sequence())
                     elif final.flat:
                         # One count for the whole frame while the clock allows, raised only
                         # where the whole frame affords it at the cost the columns measured
                         # (``column_count``).
                         frame_affordable = final_seconds / (frame_sample_s * pacer.cost_ratio)
-                        spp = (first_column_count(spp, frame_sample_s) if held is None
-                               else column_count(held, spp, frame_affordable))
+                        # (A count below one the session rendered is not rounded down:
+                        # ``sobol_friendly``.)
+                        spp = (first_column_count(spp, frame_sample_s, renderer.sequence()) if held is None
+                               else column_count(held, spp, frame_affordable, renderer.sequence()))
                         held = spp
                     seconds = keep(rect.window, renderer.render(rect.window, spp), spp)
                     pacer.record(seconds, rate * spp * rect.area)

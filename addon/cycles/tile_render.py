@@ -41,8 +41,10 @@ import numpy as np
 
 from ...core.camera import border_for_window
 from ...core.errors import InputError
+from ...core.sampling.sample_pattern import session_sequence
 from ..scene.probe import render_size
 from ..scene.shader_export import has_volume
+from ..scene.state import forget_session_counts, note_session_count, session_largest_count
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -55,10 +57,12 @@ _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
 _synced_volumes: dict[int, tuple] = {}
 
 
-def forget_synced_volumes() -> None:
-    """A new run starts: what an earlier one synced is not known to hold (the artist may have
-    rendered since), so each scene's first render tags it."""
+def forget_synced_session() -> None:
+    """A new run starts: what an earlier one synced, and the counts it rendered, are not known
+    to hold (the artist may have rendered since), so each scene's first render tags it, and a
+    session kept from before is let go (``CyclesWindowRenderer``)."""
     _synced_volumes.clear()
+    forget_session_counts()
 
 
 def volume_materials(scene) -> list:
@@ -145,6 +149,14 @@ class CyclesWindowRenderer:
         self.width, self.height = render_size(scene)
         ensure_cycles(scene)
         cycles, render = scene.cycles, scene.render
+        if render.use_persistent_data and session_largest_count(scene) is None:
+            # A session kept from before the run (the artist's persistent data) may have
+            # rendered more samples than this run will, which with blue noise would leave
+            # every render of the run on that longer sequence: turning persistent data off
+            # lets it go (one scene sync more, paid only where the artist kept a session).
+            render.use_persistent_data = False
+        if not render.use_persistent_data:
+            note_session_count(scene, 0)        # the first render creates the session
         render.use_persistent_data = True
         cycles.use_denoising = False
         cycles.use_adaptive_sampling = False
@@ -170,6 +182,11 @@ class CyclesWindowRenderer:
         #: Seconds Cycles reported syncing the scene, over every render so far: near 0 once
         #: the scene is synced (persistent data), seconds where it syncs again.
         self.sync_seconds = 0.0
+
+    def sequence(self) -> int:
+        """The per-pixel sequence length a render of fewer samples than the session's largest
+        so far draws from (0: its own count; ``core.sampling.sample_pattern.session_sequence``)."""
+        return session_sequence(self.scene.cycles.sampling_pattern, session_largest_count(self.scene) or 0)
 
     # -- context manager -------------------------------------------------------------------
     def __enter__(self) -> "CyclesWindowRenderer":
@@ -278,6 +295,8 @@ class CyclesWindowRenderer:
             bpy.app.handlers.render_stats.append(self._handler)
         started = time.perf_counter()
         _synced_volumes[scene.as_pointer()] = _volume_settings(scene, self.volume_materials)
+        # (Before the render: Cycles may have taken the count even where the render fails.)
+        note_session_count(scene, samples)
         try:
             result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
         except BaseException:

@@ -163,6 +163,30 @@ class SceneState:
         self._kept.add(datablock.as_pointer())
 
 
+#: Per scene (its pointer), the most samples per pixel a render of ours asked of the Cycles
+#: session persistent data keeps for it: with blue noise a later render of fewer samples
+#: draws them from that longer sequence (``core.sampling.sample_pattern.session_sequence``).
+#: Absent: not known (a session kept from before, whose renders may have asked for any
+#: count). The outermost ``preserved_scene`` lets a session we rendered in go.
+_session_counts: dict[int, int] = {}
+
+
+def session_largest_count(scene) -> int | None:
+    """The most samples per pixel asked of the scene's kept Cycles session, None if not known."""
+    return _session_counts.get(scene.as_pointer())
+
+
+def note_session_count(scene, samples: int) -> None:
+    """A render of ``samples`` per pixel in the scene's kept session (0: a fresh session)."""
+    key = scene.as_pointer()
+    _session_counts[key] = max(_session_counts.get(key, 0), int(samples))
+
+
+def forget_session_counts() -> None:
+    """A new run starts: the artist may have rendered since, any count."""
+    _session_counts.clear()
+
+
 @contextmanager
 def preserved_scene(scene):
     """Record the scene's settings, run the block, put everything back.
@@ -209,6 +233,14 @@ def preserved_scene(scene):
             scene.update_tag()
             for name in touched - {"cycles"}:
                 structs[name].id_data.update_tag()
+        if outermost and _session_counts.pop(key, 0):
+            if scene.render.use_persistent_data:
+                # The artist keeps a session (persistent data): let go of the one the block
+                # rendered in, whose longest sample count their next render would otherwise
+                # draw its blue noise from (``core.sampling.sample_pattern.session_sequence``).
+                # Their next render syncs the scene afresh.
+                scene.render.use_persistent_data = False
+                scene.render.use_persistent_data = True
         if preferences is not None:
             # After the settings: a debug sample pattern reads back only while they are on.
             _restore_preferences(preferences)

@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import SettingError
 from .composite import Window
 from .render_options import UNBOUNDED_SPP  # noqa: F401 (where guided's callers found it)
-from .tile_plan import Rect, merge_rects, tile_windows
+from .tile_plan import Rect, merge_rects, render_order, tile_windows
 
 #: The longest time budget accepted: a week (anything longer is a typo).
 MAX_TIME_BUDGET = 7 * 24 * 3600.0
@@ -246,7 +246,7 @@ def plan_final_pass(scores: np.ndarray, importance: np.ndarray | None, width: in
         return FinalPass(rects=rects, totals=totals, flat=True)
     rects = merge_rects([Rect(r0, r1, c0, c1, int(count))
                          for (r0, r1, c0, c1), count in zip(windows, counts)])
-    return FinalPass(rects=split_rects(rects, FINAL_PASS_PIECES), totals=totals)
+    return FinalPass(rects=render_order(split_rects(rects, FINAL_PASS_PIECES)), totals=totals)
 
 
 def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:

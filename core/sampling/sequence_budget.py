@@ -94,7 +94,8 @@ class SequenceBudget:
             return 0.0
         return BUDGET_OVERRUN * self.per_frame * self.frames / max(1, self.frames - self.done) / frame_sample_seconds
 
-    def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float) -> int:
+    def steady_count(self, affordable: float, ceiling: int, frame_sample_seconds: float,
+                     sequence: int = 0) -> int:
         """The samples per pixel of a frame of the range that can afford ``affordable`` (its
         share of what the range has left), one sample per pixel of the whole frame costing
         ``frame_sample_seconds``: the frame before's count while the frames left can all
@@ -103,13 +104,15 @@ class SequenceBudget:
         changes the noise, which shows as flicker), else a fresh count at one Cycles'
         patterns like, within the frame's share (the first frame's, with no frame before);
         either raised to the power of two above it where the allowance reaches it. In the
-        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is."""
+        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is.
+        ``sequence``: the per-pixel sequence the range's Cycles session already draws from
+        (``sobol_friendly``: a count below it is not rounded down)."""
         reach = affordable + self.allowance(frame_sample_seconds)
         closing = self.frames - self.done <= LAST_FRAMES_UNRAISED
         if self.spp and self.spp <= reach and (closing or affordable <= HOLD_RANGE[1] * self.spp):
             count = max(1, min(self.spp, ceiling))
             return count if closing else power_of_two_within(count, reach, ceiling)
-        count = sobol_friendly(max(1, min(int(affordable), ceiling)))
+        count = sobol_friendly(max(1, min(int(affordable), ceiling)), sequence)
         return power_of_two_within(count, reach, ceiling)
 
     def to_dict(self) -> dict:

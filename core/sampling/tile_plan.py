@@ -265,6 +265,16 @@ def merge_rects(rects: list[Rect]) -> list[Rect]:
     return sorted(rects, key=lambda rect: (rect.row0, rect.col0))
 
 
+def render_order(rects: list[Rect]) -> list[Rect]:
+    """``rects`` in the order one Cycles session should render them: fewest samples first
+    (then top to bottom, left to right). A kept session lays blue noise out by the largest
+    count it has rendered, so a rectangle rendered after one of more samples would draw its
+    samples from that longer sequence and render worse after denoising
+    (``core.sampling.sample_pattern.session_sequence``); in rising order every rectangle
+    gets the pixels a fresh session gives it."""
+    return sorted(rects, key=lambda rect: (rect.spp, rect.row0, rect.col0))
+
+
 def make_plan(director_map: np.ndarray, options: RenderOptions) -> TilePlan:
     """The tile plan for a director map (values in [0, 1] at render resolution).
 
@@ -279,7 +289,7 @@ def make_plan(director_map: np.ndarray, options: RenderOptions) -> TilePlan:
     ladder = spp_ladder(options.spp_levels, options.min_spp, options.max_spp) if options.spp_levels else None
     rects = [rect for window in tile_windows(width, height, options.tile_size)
              for rect in split_tile(targets, window, options.tile_quantile, options.render_cost, ladder)]
-    rects = merge_rects(rects)
+    rects = render_order(merge_rects(rects))
     plan = TilePlan(width=width, height=height, max_spp=options.max_spp, min_spp=options.min_spp,
                     tile_size=options.tile_size, tile_quantile=options.tile_quantile,
                     spp_levels=options.spp_levels, rects=rects,
