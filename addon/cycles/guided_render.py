@@ -422,8 +422,10 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                 final = replace(final, rects=rendered_rects)
                 phases["final"] = clock.now() - began
             if pace is not None and rendered_samples:
+                # (The count the next frame holds: a count kept whole below the session's
+                # longest stays whole, ``sobol_friendly``.)
                 pace.observe(rendered_s, rendered_samples,
-                             sobol_friendly(rendered_samples // (width * height)))
+                             sobol_friendly(rendered_samples // (width * height), renderer.sequence()))
 
         began = clock.now()
         merged, merged_guides = image.result(), guides.result()
