@@ -147,3 +147,25 @@ def test_a_selective_render_gives_every_rectangle_a_fresh_sessions_pixels(blende
         expected = _fresh(scene, BLENDER_DEFAULT, rect["spp"], window)
         got = outcome.image[window[0]:window[1], window[2]:window[3]]
         np.testing.assert_allclose(got[..., :3], expected[..., :3], rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.blender
+@pytest.mark.render
+def test_a_session_let_go_forgets_its_count(blender):
+    """Persistent data turned off frees the session (a debug pattern's first use does): the
+    next renderer starts from a fresh session's count, not the one before's."""
+    from support.fog_scene import build_fog_scene
+
+    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
+    from xsl_render.addon.scene.state import preserved_scene
+
+    scene = build_fog_scene(blender, W, H)
+    scene.cycles.sampling_pattern = BLENDER_DEFAULT
+    forget_synced_session()
+    with preserved_scene(scene):
+        with CyclesWindowRenderer(scene, 0) as renderer:
+            renderer.render(None, 8)
+            assert renderer.sequence() == 8
+        scene.render.use_persistent_data = False
+        with CyclesWindowRenderer(scene, 0) as renderer:
+            assert renderer.sequence() == 0

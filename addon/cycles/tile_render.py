@@ -44,7 +44,7 @@ from ...core.errors import InputError
 from ...core.sampling.sample_pattern import session_sequence
 from ..scene.probe import render_size
 from ..scene.shader_export import has_volume
-from ..scene.state import forget_session_counts, note_session_count, session_largest_count
+from ..scene.state import forget_session_counts, note_new_session, note_session_count, session_largest_count
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -156,7 +156,7 @@ class CyclesWindowRenderer:
             # lets it go (one scene sync more, paid only where the artist kept a session).
             render.use_persistent_data = False
         if not render.use_persistent_data:
-            note_session_count(scene, 0)        # the first render creates the session
+            note_new_session(scene)
         render.use_persistent_data = True
         cycles.use_denoising = False
         cycles.use_adaptive_sampling = False

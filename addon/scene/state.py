@@ -177,9 +177,15 @@ def session_largest_count(scene) -> int | None:
 
 
 def note_session_count(scene, samples: int) -> None:
-    """A render of ``samples`` per pixel in the scene's kept session (0: a fresh session)."""
+    """A render of ``samples`` per pixel in the scene's kept session."""
     key = scene.as_pointer()
     _session_counts[key] = max(_session_counts.get(key, 0), int(samples))
+
+
+def note_new_session(scene) -> None:
+    """The scene's next render creates its Cycles session (persistent data was off, so none
+    is kept): whatever an earlier one rendered no longer counts."""
+    _session_counts[scene.as_pointer()] = 0
 
 
 def forget_session_counts() -> None:
