@@ -34,6 +34,7 @@ def measure(scene_name: str, rates: list[float]) -> list[str]:
     from xsl_render.addon.scene.probe import camera_model
     from xsl_render.core.maps.transmittance import medium_segments
     from xsl_render.core.media.ray_marching import MarchingPredictor
+    from xsl_render.core.sampling.volume_estimator import visible_bias
 
     blend = Path(__file__).resolve().parents[1] / "example_blends" / f"{scene_name}.blend"
     bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
@@ -46,15 +47,13 @@ def measure(scene_name: str, rates: list[float]) -> list[str]:
                                   np.arange(rows * cols, dtype=np.int64))
     lines = [f"{scene_name} ({width}x{height}; {cols}x{rows} rays)"]
     for rate in rates:
-        error = predictor.error(rate)
-        t = error.luminance(error.transmittance)
-        measure = np.zeros(rows * cols)
-        measure[error.pixels] = np.abs(error.luminance(error.bias)) / np.maximum(np.minimum(t, 1 - t), 0.05)
-        measure = measure.reshape(rows, cols)
-        regions = np.array([np.percentile(measure[r:r + REGION, c:c + REGION], 95)
+        error = predictor.error(rate)     # (every ray: its pixels are the frame in order)
+        t = error.luminance(error.transmittance).reshape(rows, cols)
+        b = error.luminance(error.bias).reshape(rows, cols)
+        regions = np.array([visible_bias(t[r:r + REGION, c:c + REGION], b[r:r + REGION, c:c + REGION])
                             for r in range(0, rows, REGION) for c in range(0, cols, REGION)])
         shares = ", ".join(f"<= {tol:.2%}: {np.mean(regions <= tol):.2f}" for tol in TOLERANCES)
-        lines.append(f"  rate {rate:g}: frame {np.percentile(measure, 95):.4f}; regions 10/50/90 % "
+        lines.append(f"  rate {rate:g}: frame {visible_bias(t, b):.4f}; regions 10/50/90 % "
                      f"{np.percentile(regions, 10):.4f} / {np.percentile(regions, 50):.4f} / "
                      f"{np.percentile(regions, 90):.4f}; share of regions {shares}")
     return lines

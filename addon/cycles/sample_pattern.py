@@ -11,7 +11,7 @@ puts the preferences back when the outermost block ends. The preferences are nev
 from __future__ import annotations
 
 from ...core.sampling.sample_pattern import needs_debug_options
-from ..scene.state import DEBUG_PATTERN_PREFERENCES
+from ..scene.state import DEBUG_PATTERN_PREFERENCES, let_session_go
 
 
 def apply_sample_pattern(scene, pattern: str) -> None:
@@ -38,6 +38,6 @@ def _enable_debug_patterns(scene) -> None:
     for path, name in DEBUG_PATTERN_PREFERENCES:
         setattr(getattr(preferences, path), name, True)
     if scene.render.use_persistent_data:
-        # A kept session read the options off; turning persistent data off frees it (the
-        # renderer turns it on again), so the next render creates one that reads them on.
-        scene.render.use_persistent_data = False
+        # A kept session read the options off; letting it go (the renderer turns persistent
+        # data on again), the next render creates one that reads them on.
+        let_session_go(scene)

@@ -44,7 +44,7 @@ from ...core.errors import InputError
 from ...core.sampling.sample_pattern import session_sequence
 from ..scene.probe import render_size
 from ..scene.shader_export import has_volume
-from ..scene.state import forget_session_counts, note_new_session, note_session_count, session_largest_count
+from ..scene.state import forget_session_counts, let_session_go, note_session_count, session_largest_count
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -149,14 +149,12 @@ class CyclesWindowRenderer:
         self.width, self.height = render_size(scene)
         ensure_cycles(scene)
         cycles, render = scene.cycles, scene.render
-        if render.use_persistent_data and session_largest_count(scene) is None:
-            # A session kept from before the run (the artist's persistent data) may have
-            # rendered more samples than this run will, which with blue noise would leave
-            # every render of the run on that longer sequence: turning persistent data off
-            # lets it go (one scene sync more, paid only where the artist kept a session).
-            render.use_persistent_data = False
-        if not render.use_persistent_data:
-            note_new_session(scene)
+        if not render.use_persistent_data or session_largest_count(scene) is None:
+            # No session kept (the first render creates one), or one kept from before the run
+            # (the artist's persistent data), which may have rendered more samples than this
+            # run will and with blue noise would leave every render of the run on that longer
+            # sequence: let it go (one scene sync more, paid only where the artist kept one).
+            let_session_go(scene)
         render.use_persistent_data = True
         cycles.use_denoising = False
         cycles.use_adaptive_sampling = False

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cycles.render import render_passes
-from ..scene.state import preserved_scene
+from ..scene.state import let_session_go, preserved_scene
 
 #: Direct lighting from point-like lamps converges fast: a few samples, no denoiser needed.
 SNAPSHOT_SAMPLES = 4
@@ -81,7 +81,7 @@ def render_snapshot(scene, size: tuple[int, int] | None = None, samples: int = S
             render.resolution_x, render.resolution_y = size
             render.resolution_percentage = 100
         render.use_border = False
-        render.use_persistent_data = False
+        let_session_go(scene)
         _switch_media_off(scene, state)
         cycles = scene.cycles
         render.engine = "CYCLES"

@@ -182,9 +182,10 @@ def note_session_count(scene, samples: int) -> None:
     _session_counts[key] = max(_session_counts.get(key, 0), int(samples))
 
 
-def note_new_session(scene) -> None:
-    """The scene's next render creates its Cycles session (persistent data was off, so none
-    is kept): whatever an earlier one rendered no longer counts."""
+def let_session_go(scene) -> None:
+    """Turn persistent data off: Blender frees the scene's kept Cycles session (with it what
+    it synced and the counts it rendered), and its next render creates a fresh one."""
+    scene.render.use_persistent_data = False
     _session_counts[scene.as_pointer()] = 0
 
 
@@ -239,14 +240,15 @@ def preserved_scene(scene):
             scene.update_tag()
             for name in touched - {"cycles"}:
                 structs[name].id_data.update_tag()
-        if outermost and _session_counts.pop(key, 0):
-            if scene.render.use_persistent_data:
-                # The artist keeps a session (persistent data): let go of the one the block
-                # rendered in, whose longest sample count their next render would otherwise
-                # draw its blue noise from (``core.sampling.sample_pattern.session_sequence``).
-                # Their next render syncs the scene afresh.
-                scene.render.use_persistent_data = False
-                scene.render.use_persistent_data = True
+        if outermost and _session_counts.get(key) and scene.render.use_persistent_data:
+            # The artist keeps a session (persistent data): let go of the one the block
+            # rendered in, whose longest sample count their next render would otherwise
+            # draw its blue noise from (``core.sampling.sample_pattern.session_sequence``).
+            # Their next render syncs the scene afresh.
+            let_session_go(scene)
+            scene.render.use_persistent_data = True
+        if outermost:
+            _session_counts.pop(key, None)      # the artist's renders are not ours to count
         if preferences is not None:
             # After the settings: a debug sample pattern reads back only while they are on.
             _restore_preferences(preferences)
