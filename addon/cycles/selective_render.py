@@ -75,9 +75,11 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
 def apply_estimator(scene, choice) -> None:
     """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
     materials' and the world's own steps too where auto gave some media coarser ones, and
-    the sample pattern where auto chose one."""
+    the sample pattern and the light tree where auto chose them."""
     if choice.sample_pattern is not None:
         apply_sample_pattern(scene, choice.sample_pattern)
+    if choice.light_tree is not None and scene.cycles.use_light_tree != choice.light_tree:
+        scene.cycles.use_light_tree = choice.light_tree
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)

@@ -48,7 +48,7 @@ from ..scene.state import forget_session_counts, let_session_go, note_session_co
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
-#: The volume estimator settings (and the sample pattern, which auto may set too) Cycles last
+#: The volume estimator settings (and the sample pattern and light tree, which auto may set too) Cycles last
 #: synced for a scene (its pointer) in this run's persistent session. They are add-on
 #: properties, which do not tag the scene: without a tag Cycles keeps rendering with the ones
 #: it synced first, also across a frame change (street: step rate 4 then 0.25 gave the same
@@ -75,14 +75,15 @@ def volume_materials(scene) -> list:
 
 def _volume_settings(scene, materials) -> tuple:
     """The scene's estimator and step rate, the world's step size, the volume ``materials``'
-    own step rates (``--estimator auto`` may give some media coarser steps) and the sample
-    pattern (auto may set it: ``core.sampling.sample_pattern``)."""
+    own step rates (``--estimator auto`` may give some media coarser steps), the sample
+    pattern and the light tree (auto may set both: ``core.sampling.sample_pattern``,
+    ``core.sampling.light_tree``)."""
     cycles = scene.cycles
     world = getattr(scene.world, "cycles", None)
     return (bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6),
             None if world is None else round(float(world.volume_step_size), 6),
             tuple((m.name, round(float(m.cycles.volume_step_rate), 6)) for m in materials),
-            cycles.sampling_pattern)
+            cycles.sampling_pattern, bool(cycles.use_light_tree))
 
 
 def _tag_volume_changes(scene, materials) -> bool:

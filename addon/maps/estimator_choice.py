@@ -15,11 +15,13 @@ from dataclasses import replace
 from ...core.maps.transmittance import medium_segments
 from ...core.media.ray_marching import MarchingPredictor, medium_step, sample_pixels
 from ...core.sampling.render_options import RenderOptions
+from ...core.sampling.light_tree import auto_light_tree
 from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, kept_null_scattering, per_medium_rates,
                                                visible_bias)
 from ..scene.geometry import scan_scene, step_setting
+from ..scene.light_sampling import links_lights, sampled_lights
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
 
@@ -37,7 +39,8 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
                      previous: EstimatorChoice | None = None) -> EstimatorChoice:
     """The volume estimator a run of ``spp`` samples per pixel renders with, and for auto the
     sample pattern (blue noise, its sequence rounded up to a power of two, where the file
-    carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``).
+    carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``), and
+    the light tree (off where the scene has one light: ``core.sampling.light_tree``).
 
     ``options.estimator`` other than auto is taken as given; auto predicts (``_volumes``),
     never trying a step rate above ``options.step_rate`` when one is given, and keeping
@@ -48,7 +51,18 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
     if options.estimator != "auto":
         return fixed_choice(options.estimator, options.step_rate)
     return replace(_volumes(scene, options, spp, previous),
-                   sample_pattern=auto_sample_pattern(scene.cycles.sampling_pattern))
+                   sample_pattern=auto_sample_pattern(scene.cycles.sampling_pattern),
+                   light_tree=_light_tree(scene))
+
+
+def _light_tree(scene) -> bool | None:
+    """Auto's light tree: off where Cycles samples one light (``core.sampling.light_tree``)."""
+    import bpy
+
+    if not scene.cycles.use_light_tree:
+        return None
+    return auto_light_tree(True, sampled_lights(scene, bpy.context.evaluated_depsgraph_get()),
+                           links_lights(scene))
 
 
 def _volumes(scene, options: RenderOptions, spp: float,

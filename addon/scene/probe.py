@@ -54,21 +54,21 @@ def camera_model(scene, size: tuple[int, int] | None = None, respect_border: boo
 # Shader graphs
 
 
-def _linked_from(socket):
+def linked_from(socket):
     """The output socket feeding ``socket`` (skipping reroutes and muted links), or None."""
     for link in socket.links:
         if link.is_muted:
             continue
         node = link.from_node
         if node.type == "REROUTE":
-            return _linked_from(node.inputs[0])
+            return linked_from(node.inputs[0])
         return link.from_socket
     return None
 
 
 def _value(socket):
     """A socket's constant value (float or RGB tuple), or None when something drives it."""
-    if _linked_from(socket) is not None:
+    if linked_from(socket) is not None:
         return None
     value = socket.default_value
     try:
@@ -78,7 +78,7 @@ def _value(socket):
 
 
 def _driver_name(socket) -> str | None:
-    source = _linked_from(socket)
+    source = linked_from(socket)
     return None if source is None else f"{source.node.type}:{source.node.name}"
 
 
@@ -95,38 +95,39 @@ def walk_shader(output_socket, weight: float | None = 1.0, depth: int = 0):
         return
     if node.type == "ADD_SHADER":
         for socket in node.inputs:
-            yield from walk_shader(_linked_from(socket), weight, depth + 1)
+            yield from walk_shader(linked_from(socket), weight, depth + 1)
     elif node.type == "MIX_SHADER":
         fac = _value(node.inputs[0])
         for socket, w in ((node.inputs[1], None if fac is None else 1.0 - fac),
                           (node.inputs[2], fac)):
             if w == 0.0:
                 continue
-            yield from walk_shader(_linked_from(socket),
+            yield from walk_shader(linked_from(socket),
                                    None if weight is None or w is None else weight * w, depth + 1)
     elif node.type == "GROUP" and node.node_tree is not None:
         inner_out = next((n for n in node.node_tree.nodes
                           if n.type == "GROUP_OUTPUT" and n.is_active_output), None)
         if inner_out is not None:
             index = list(node.outputs).index(output_socket)
-            yield from walk_shader(_linked_from(inner_out.inputs[index]), weight, depth + 1)
+            yield from walk_shader(linked_from(inner_out.inputs[index]), weight, depth + 1)
     else:
         yield node, weight
 
 
-def _output_input(node_tree, name: str):
+def output_shader(node_tree, name: str):
+    """The socket feeding the Cycles output node's ``name`` input ("Surface", "Volume"), or None."""
     if node_tree is None:
         return None
     output = node_tree.get_output_node("CYCLES")
     if output is None or name not in output.inputs:
         return None
-    return _linked_from(output.inputs[name])
+    return linked_from(output.inputs[name])
 
 
 def volume_closures(node_tree, grid_names: tuple[str, ...] = ()) -> list[VolumeClosure]:
     """The volume closures feeding the Volume output of a material or world node tree."""
     closures = []
-    for node, weight in walk_shader(_output_input(node_tree, "Volume")):
+    for node, weight in walk_shader(output_shader(node_tree, "Volume")):
         if node.type not in VOLUME_NODE_TYPES:
             continue
         density = _value(node.inputs["Density"]) if "Density" in node.inputs else 1.0
@@ -212,12 +213,12 @@ def find_media(scene, depsgraph) -> list[Medium]:
 # Lights
 
 
-def _emission(node_tree) -> tuple[tuple, float] | None:
+def surface_emission(node_tree) -> tuple[tuple, float] | None:
     """(colour, strength) of the emission a surface shader adds, or None.
 
     A driven strength or colour counts as emissive with the socket's own value."""
     best = None
-    for node, weight in walk_shader(_output_input(node_tree, "Surface")):
+    for node, weight in walk_shader(output_shader(node_tree, "Surface")):
         if node.type == "EMISSION":
             color_socket, strength_socket = node.inputs["Color"], node.inputs["Strength"]
         elif node.type == "BSDF_PRINCIPLED":
@@ -226,7 +227,7 @@ def _emission(node_tree) -> tuple[tuple, float] | None:
             continue
         color = tuple(color_socket.default_value)[:3]
         strength = float(strength_socket.default_value) * (1.0 if weight is None else weight)
-        driven = _linked_from(strength_socket) is not None or _linked_from(color_socket) is not None
+        driven = linked_from(strength_socket) is not None or linked_from(color_socket) is not None
         if not driven and (strength <= 0.0 or max(color) <= 0.0):
             continue
         if best is None or strength > best[1]:
@@ -259,7 +260,7 @@ def find_lights(scene, depsgraph, camera: CameraModel | None = None) -> list[Lig
             for slot in ob.material_slots:
                 if slot.material is None:
                     continue
-                found = _emission(slot.material.node_tree)
+                found = surface_emission(slot.material.node_tree)
                 if found is None:
                     continue
                 lo, hi = (np.array(v) for v in _world_bbox(ob, matrix))

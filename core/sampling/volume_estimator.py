@@ -107,6 +107,8 @@ class EstimatorChoice:
     what the run's samples allow, ``tried`` each rate auto predicted: {rate: measure}.
     ``sample_pattern``: Cycles' sample pattern auto renders with in place of the scene's
     legacy or blue-noise one (``core.sampling.sample_pattern``), None for the scene's own.
+    ``light_tree``: Cycles' light tree as auto renders it (False: off, where the scene has
+    one light: ``core.sampling.light_tree``), None for the scene's own.
     """
 
     estimator: str
@@ -133,6 +135,7 @@ class EstimatorChoice:
     #: part of the record (``to_dict``) nor of equality.
     remeasure: Callable | None = field(default=None, repr=False, compare=False)
     sample_pattern: str | None = None
+    light_tree: bool | None = None
 
     @property
     def prefilter_guides(self) -> bool:
@@ -153,6 +156,7 @@ class EstimatorChoice:
         pattern = "" if self.sample_pattern is None else \
             f"; sample pattern {self.sample_pattern} (blue noise, its sequence rounded up to a power of two)"
         pattern += "; denoising guides prefiltered where noisy" if self.prefilter_guides else ""
+        pattern += "; light tree off (one light: the same pixels sooner)" if self.light_tree is False else ""
         if self.biased is None:
             return "the scene's own volume settings" + pattern
         if not self.biased:
@@ -309,7 +313,7 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
                            tolerance=choice.tolerance, tried=choice.tried,
                            reason=f"provisional: the finest rate, until the budget's count is known "
                                   f"({choice.reason})", seconds=choice.seconds,
-                           sample_pattern=choice.sample_pattern)
+                           sample_pattern=choice.sample_pattern, light_tree=choice.light_tree)
 
 
 def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
@@ -346,7 +350,8 @@ def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
         # Not measured with the new rate: the materials' and world's own values (a run that
         # rendered its pilot with coarser steps has them set).
         again = replace(again, medium_settings=dict(media["own"]), media=media)
-    return replace(again, tried=tried, seconds=choice.seconds, sample_pattern=choice.sample_pattern)
+    return replace(again, tried=tried, seconds=choice.seconds, sample_pattern=choice.sample_pattern,
+                   light_tree=choice.light_tree)
 
 
 def _known_or_predicted(known: dict, remeasure):
