@@ -156,7 +156,7 @@ class EstimatorChoice:
         pattern = "" if self.sample_pattern is None else \
             f"; sample pattern {self.sample_pattern} (blue noise, its sequence rounded up to a power of two)"
         pattern += "; denoising guides prefiltered where noisy" if self.prefilter_guides else ""
-        pattern += "; light tree off (one light: the same pixels sooner)" if self.light_tree is False else ""
+        pattern += "; light tree off (one light: the same estimate sooner)" if self.light_tree is False else ""
         if self.biased is None:
             return "the scene's own volume settings" + pattern
         if not self.biased:
