@@ -75,7 +75,8 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
 def apply_estimator(scene, choice) -> None:
     """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
     materials' and the world's own steps too where auto gave some media coarser ones, and
-    the sample pattern and the light tree where auto chose them."""
+    the sample pattern, the light tree and (while it ray-marches) the media's volume
+    sampling where auto chose them."""
     if choice.sample_pattern is not None:
         apply_sample_pattern(scene, choice.sample_pattern)
     if choice.light_tree is not None and scene.cycles.use_light_tree != choice.light_tree:
@@ -83,6 +84,10 @@ def apply_estimator(scene, choice) -> None:
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)
+    for key, method in (choice.scatter_sampling or {}).items() if choice.biased else ():
+        settings = step_setting(key)[0]
+        if settings.volume_sampling != method:
+            settings.volume_sampling = method
     if choice.biased and choice.step_rate is not None:
         scene.cycles.volume_step_rate = float(choice.step_rate)
     for key, value in (choice.medium_settings or {}).items():

@@ -74,15 +74,17 @@ def volume_materials(scene) -> list:
 
 
 def _volume_settings(scene, materials) -> tuple:
-    """The scene's estimator and step rate, the world's step size, the volume ``materials``'
-    own step rates (``--estimator auto`` may give some media coarser steps), the sample
+    """The scene's estimator and step rate, the world's step size and volume sampling, the
+    volume ``materials``' own step rates and sampling (``--estimator auto`` may give some
+    media coarser steps, or distance sampling), the sample
     pattern and the light tree (auto may set both: ``core.sampling.sample_pattern``,
     ``core.sampling.light_tree``)."""
     cycles = scene.cycles
     world = getattr(scene.world, "cycles", None)
     return (bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6),
-            None if world is None else round(float(world.volume_step_size), 6),
-            tuple((m.name, round(float(m.cycles.volume_step_rate), 6)) for m in materials),
+            None if world is None else (round(float(world.volume_step_size), 6), world.volume_sampling),
+            tuple((m.name, round(float(m.cycles.volume_step_rate), 6), m.cycles.volume_sampling)
+                  for m in materials),
             cycles.sampling_pattern, bool(cycles.use_light_tree))
 
 
@@ -98,7 +100,7 @@ def _tag_volume_changes(scene, materials) -> bool:
     # Nothing known (a run's first render): Cycles may hold any steps, tag them all.
     if (synced is None or synced[2] != now[2]) and scene.world is not None:
         scene.world.update_tag()
-    for name, rate in set(now[3]) - set(() if synced is None else synced[3]):
+    for name, *_ in set(now[3]) - set(() if synced is None else synced[3]):
         bpy.data.materials[name].update_tag()
     return True
 

@@ -22,6 +22,7 @@ from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice,
                                                visible_bias)
 from ..scene.geometry import scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
+from .scatter_choice import scatter_sampling
 from ..scene.probe import camera_model, render_size
 from .zbuffer import cast_camera_rays
 
@@ -93,6 +94,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
     segments = [medium_segments(rays, m) for m in media]
     pixels = sample_pixels(rays.shape, count)
     predictor = MarchingPredictor(rays, media, segments, pixels)
+    methods, noises = scatter_sampling(scene, depsgraph, rays, media, segments, pixels)
     if not predictor.heterogeneous:
         choice = EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
                                  reason="homogeneous media only: ray marching takes each in one "
@@ -108,7 +110,8 @@ def _volumes(scene, options: RenderOptions, spp: float,
             # Kept for a time-budgeted still's settle, which may need finer rates or the
             # media's steps at another scene rate (``settled_for``).
             choice = replace(choice, remeasure=measure)
-    return replace(choice, seconds=time.perf_counter() - started)
+    return replace(choice, scatter_sampling=methods or None, scatter_noise=noises or None,
+                   seconds=time.perf_counter() - started)
 
 
 def step_carriers(media) -> dict:

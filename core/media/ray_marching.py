@@ -97,7 +97,7 @@ def sample_pixels(shape: tuple[int, int], count: int) -> np.ndarray:
     return (rows[:, None] * width + cols[None, :]).ravel().astype(np.int64)
 
 
-def _ray_pieces(rays, media, segments, pixels):
+def ray_pieces(rays, media, segments, pixels):
     """Per sampled ray, its pieces between boundaries with the media active in each:
     lists (ray position, a, b, active-medium tuple)."""
     position = {int(p): i for i, p in enumerate(pixels)}
@@ -123,7 +123,7 @@ def _ray_pieces(rays, media, segments, pixels):
     return pieces
 
 
-def _extinction(media, active, points) -> np.ndarray:
+def extinction_at(media, active, points) -> np.ndarray:
     total = np.zeros((len(points), 3))
     for m in active:
         total += media[m].extinction(points)
@@ -164,7 +164,7 @@ class MarchingPredictor:
         index = np.arange(runs)
         self.u = (index + 0.5) / runs
         self.v = np.mod(0.5 + index * _GOLDEN, 1.0)
-        self.pieces = _ray_pieces(rays, media, segments, self.pixels)
+        self.pieces = ray_pieces(rays, media, segments, self.pixels)
         # Pieces by the media active in them; pieces in homogeneous media only are marched in
         # one exact step at every rate.
         by_active: dict = {}
@@ -329,7 +329,7 @@ class _Evaluator:
         waiting = self._waiting.pop(active, [])
         if not waiting:
             return
-        sigma = _extinction(self.media, active, np.concatenate([p for p, _ in waiting]))
+        sigma = extinction_at(self.media, active, np.concatenate([p for p, _ in waiting]))
         first = 0
         for points, done in waiting:
             done(sigma[first:first + len(points)])

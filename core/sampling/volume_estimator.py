@@ -109,6 +109,9 @@ class EstimatorChoice:
     legacy or blue-noise one (``core.sampling.sample_pattern``), None for the scene's own.
     ``light_tree``: Cycles' light tree as auto renders it (False: off, where the scene has
     one light: ``core.sampling.light_tree``), None for the scene's own.
+    ``scatter_sampling``: the media whose volume sampling auto changes while it ray-marches
+    ("material:<name>", "world:<name>" -> Cycles' method; ``core.media.scatter_sampling``),
+    ``scatter_noise`` the predicted noise of each method per medium.
     """
 
     estimator: str
@@ -136,6 +139,8 @@ class EstimatorChoice:
     remeasure: Callable | None = field(default=None, repr=False, compare=False)
     sample_pattern: str | None = None
     light_tree: bool | None = None
+    scatter_sampling: dict | None = None
+    scatter_noise: dict | None = None
 
     @property
     def prefilter_guides(self) -> bool:
@@ -157,6 +162,9 @@ class EstimatorChoice:
             f"; sample pattern {self.sample_pattern} (blue noise, its sequence rounded up to a power of two)"
         pattern += "; denoising guides prefiltered where noisy" if self.prefilter_guides else ""
         pattern += "; light tree off (one light: the same estimate sooner)" if self.light_tree is False else ""
+        if self.biased and self.scatter_sampling:
+            pattern += "".join(f"; {key.split(':', 1)[1]} sampled by {method.lower()}"
+                               for key, method in self.scatter_sampling.items())
         if self.biased is None:
             return "the scene's own volume settings" + pattern
         if not self.biased:
@@ -313,7 +321,8 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
                            tolerance=choice.tolerance, tried=choice.tried,
                            reason=f"provisional: the finest rate, until the budget's count is known "
                                   f"({choice.reason})", seconds=choice.seconds,
-                           sample_pattern=choice.sample_pattern, light_tree=choice.light_tree)
+                           sample_pattern=choice.sample_pattern, light_tree=choice.light_tree,
+                           scatter_sampling=choice.scatter_sampling, scatter_noise=choice.scatter_noise)
 
 
 def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
@@ -351,7 +360,8 @@ def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
         # rendered its pilot with coarser steps has them set).
         again = replace(again, medium_settings=dict(media["own"]), media=media)
     return replace(again, tried=tried, seconds=choice.seconds, sample_pattern=choice.sample_pattern,
-                   light_tree=choice.light_tree)
+                   light_tree=choice.light_tree, scatter_sampling=choice.scatter_sampling,
+                   scatter_noise=choice.scatter_noise)
 
 
 def _known_or_predicted(known: dict, remeasure):
