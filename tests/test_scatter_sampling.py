@@ -146,3 +146,25 @@ def test_the_chosen_sampling_reaches_cycles_and_is_put_back(blender, monkeypatch
     seen.clear()
     sr.render_uniform(scene, RenderOptions(max_spp=2, estimator="biased").check(), spp=2)
     assert set(seen) == {(True, BOTH)}                       # other estimators: the file's own
+
+
+@pytest.mark.blender
+def test_a_settle_to_null_scattering_puts_the_own_method_back(blender):
+    """A time budget's pilot ray-marches with distance sampling; where its count then settles
+    on null scattering, the medium renders with its own method again."""
+    from dataclasses import replace
+
+    from xsl_render.addon.cycles.selective_render import apply_estimator
+    from xsl_render.addon.maps.estimator_choice import choose_estimator
+    from xsl_render.addon.scene.state import preserved_scene
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene, _ = _thick_box(blender)
+    fog = blender.data.materials["Fog"]
+    choice = choose_estimator(scene, RenderOptions(max_spp=16, estimator="auto").check(), 16)
+    assert choice.scatter_own == {"material:Fog": BOTH}
+    with preserved_scene(scene):
+        apply_estimator(scene, replace(choice, biased=True))
+        assert fog.cycles.volume_sampling == DISTANCE
+        apply_estimator(scene, replace(choice, biased=False))
+        assert fog.cycles.volume_sampling == BOTH and not scene.cycles.volume_biased

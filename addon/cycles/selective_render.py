@@ -84,7 +84,9 @@ def apply_estimator(scene, choice) -> None:
     if choice.biased is None:
         return
     scene.cycles.volume_biased = bool(choice.biased)
-    for key, method in (choice.scatter_sampling or {}).items() if choice.biased else ():
+    # (A settle from ray marching to null scattering puts the media's own methods back.)
+    methods = (choice.scatter_sampling if choice.biased else choice.scatter_own) or {}
+    for key, method in methods.items():
         settings = step_setting(key)[0]
         if settings.volume_sampling != method:
             settings.volume_sampling = method

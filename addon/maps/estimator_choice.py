@@ -94,7 +94,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
     segments = [medium_segments(rays, m) for m in media]
     pixels = sample_pixels(rays.shape, count)
     predictor = MarchingPredictor(rays, media, segments, pixels)
-    methods, noises = scatter_sampling(scene, depsgraph, rays, media, segments, pixels)
+    methods, noises, own = scatter_sampling(scene, depsgraph, rays, media, segments, pixels)
     if not predictor.heterogeneous:
         choice = EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
                                  reason="homogeneous media only: ray marching takes each in one "
@@ -111,7 +111,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
             # media's steps at another scene rate (``settled_for``).
             choice = replace(choice, remeasure=measure)
     return replace(choice, scatter_sampling=methods or None, scatter_noise=noises or None,
-                   seconds=time.perf_counter() - started)
+                   scatter_own=own or None, seconds=time.perf_counter() - started)
 
 
 def step_carriers(media) -> dict:

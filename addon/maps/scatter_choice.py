@@ -25,10 +25,10 @@ def medium_carrier(medium) -> str | None:
     return None if medium.material is None else f"material:{medium.material}"
 
 
-def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[dict, dict]:
-    """({carrier: the method auto sets}, {carrier: {method: predicted noise}}) for the media
-    whose method auto changes, and the predictions of all; from every ``RAY_STRIDE``-th of
-    the sampled ``pixels``."""
+def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[dict, dict, dict]:
+    """({carrier: the method auto sets}, {carrier: {method: predicted noise}}, {carrier: its
+    own method}): the first and last for the media whose method auto changes, the predictions
+    for all; from every ``RAY_STRIDE``-th of the sampled ``pixels``."""
     pixels = pixels[::RAY_STRIDE]
     positions, power = _sampled_point_lights(scene, depsgraph)
     carriers: dict[str, list[int]] = {}
@@ -37,7 +37,7 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
         if key is not None:
             carriers.setdefault(key, []).append(index)
     if not carriers or not len(power):
-        return {}, {}
+        return {}, {}, {}
     origins = rays.origins.reshape(-1, 3)[pixels]
     directions = rays.directions.reshape(-1, 3)[pixels]
     by_ray: dict[int, list] = {}
@@ -57,7 +57,7 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
                 inside[m].append(offsets[-1] + p * POINTS_PER_PIECE + np.arange(POINTS_PER_PIECE))
         offsets.append(offsets[-1] + len(rays_t[-1]))
     if not rays_t:
-        return {}, {}
+        return {}, {}, {}
     points = np.concatenate(rays_points)
     own = np.zeros((len(media), len(points)))
     for m, chunks in enumerate(inside):
@@ -73,13 +73,14 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
             per_ray[key].append(ray_noise(t[order], rays_dt[r][order], total[span][order],
                                           own[members, span].sum(axis=0)[order], points[span][order],
                                           positions, power))
-    methods, noises = {}, {}
+    methods, noises, own = {}, {}, {}
     for key, rows in per_ray.items():
         noises[key] = combined_noise(rows)
-        method = chosen_method(noises[key], step_setting(key)[0].volume_sampling)
+        own[key] = step_setting(key)[0].volume_sampling
+        method = chosen_method(noises[key], own[key])
         if method is not None:
             methods[key] = method
-    return methods, noises
+    return methods, noises, {key: own[key] for key in methods}
 
 
 def _sampled_point_lights(scene, depsgraph) -> tuple[np.ndarray, np.ndarray]:

@@ -111,7 +111,8 @@ class EstimatorChoice:
     one light: ``core.sampling.light_tree``), None for the scene's own.
     ``scatter_sampling``: the media whose volume sampling auto changes while it ray-marches
     ("material:<name>", "world:<name>" -> Cycles' method; ``core.media.scatter_sampling``),
-    ``scatter_noise`` the predicted noise of each method per medium.
+    ``scatter_noise`` the predicted noise of each method per medium, ``scatter_own`` those
+    media's own methods (what they render with while auto keeps null scattering).
     """
 
     estimator: str
@@ -141,6 +142,7 @@ class EstimatorChoice:
     light_tree: bool | None = None
     scatter_sampling: dict | None = None
     scatter_noise: dict | None = None
+    scatter_own: dict | None = None
 
     @property
     def prefilter_guides(self) -> bool:
@@ -322,7 +324,8 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
                            reason=f"provisional: the finest rate, until the budget's count is known "
                                   f"({choice.reason})", seconds=choice.seconds,
                            sample_pattern=choice.sample_pattern, light_tree=choice.light_tree,
-                           scatter_sampling=choice.scatter_sampling, scatter_noise=choice.scatter_noise)
+                           scatter_sampling=choice.scatter_sampling, scatter_noise=choice.scatter_noise,
+                           scatter_own=choice.scatter_own)
 
 
 def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
@@ -361,7 +364,7 @@ def settled_for(choice: EstimatorChoice, spp: float) -> EstimatorChoice:
         again = replace(again, medium_settings=dict(media["own"]), media=media)
     return replace(again, tried=tried, seconds=choice.seconds, sample_pattern=choice.sample_pattern,
                    light_tree=choice.light_tree, scatter_sampling=choice.scatter_sampling,
-                   scatter_noise=choice.scatter_noise)
+                   scatter_noise=choice.scatter_noise, scatter_own=choice.scatter_own)
 
 
 def _known_or_predicted(known: dict, remeasure):
