@@ -14,20 +14,27 @@ where the medium is thick and uneven and the lights are far from the rays (then 
 varies and sigma_t T carries the integrand); equiangular where a lamp sits in thin fog near
 the rays (G peaks).
 
-Measured against Cycles (auto's ray marching, 16 spp, OIDN, medians of 3 seeds, mean FLIP
-against the converged references; ``docs/bench_scatter_sampling.txt``): on balls_b (noise
-fog lit by an area light from outside) distance sampling scored 0.0430 against the
-material's own multiple importance 0.0473 and equiangular 0.0506, in less time (7.05 s
-against 8.23); the prediction, 0.25 / 0.60 / 1.19. On balls_a (the same room in thin
-homogeneous fog) multiple importance 0.0274, equiangular 0.0291, distance 0.0310; predicted
-0.20 / 0.09 / 0.31. Street (lamps inside noise fog): 0.0632 / 0.0651 / 0.0742, predicted
-1.68 / 1.78 / 3.11. Road (lamps in world fog; the world's own method is equiangular): 0.0391
-equiangular, 0.0434 both, 0.0565 distance; predicted 1.24 / 1.60 / 4.22. Statue (smoke,
-a spot and an area light beside it): 0.0403 distance, 0.0409 both and equiangular;
-predicted 0.26 / 0.58 / 1.06. So auto switches a medium to distance sampling only where
-that is predicted to leave less than ``DISTANCE_MARGIN`` of its own method's noise (balls_b
-0.41, statue 0.45; balls_a, street and road stay): where the prediction ranks equiangular
-first by less (balls_a) Cycles did not follow it, so the medium's own method is kept then.
+Measured against Cycles (auto's ray marching, 16 spp, OIDN as auto denoises, medians of 3
+seeds, mean FLIP against the converged references; ``bench/bench_scatter_sampling.py``,
+``docs/bench_scatter_sampling.txt``), with the prediction for distance / both / equiangular:
+
+- balls_b (noise fog lit by an area light from outside): distance 0.0430 in 7.53 s, the
+  material's own multiple importance 0.0473 in 8.11 s, equiangular 0.0506; predicted 0.25 /
+  0.60 / 1.19.
+- statue (smoke, a spot and an area light beside it): 0.0403 in 7.65 s, 0.0409 in 8.59 s,
+  0.0409; predicted 0.26 / 0.58 / 1.05.
+- balls_a (the same room in thin homogeneous fog): 0.0310, 0.0274, 0.0295; predicted 0.31 /
+  0.20 / 0.09.
+- street (lamps inside noise fog): 0.0742, 0.0632, 0.0651; predicted 3.37 / 1.71 / 1.89.
+- road (lamps in world fog; the world's own method is equiangular): 0.0571, 0.0434, 0.0392;
+  predicted 4.56 / 1.57 / 1.22.
+
+Distance sampling is also the cheapest per sample (one strategy instead of two). The
+prediction ranks distance against the own method as Cycles does on all five, and all three
+methods as Cycles does on four (balls_a: equiangular predicted first, measured second by 8 %).
+So auto switches a medium to distance sampling only where that is predicted to leave less
+than ``DISTANCE_MARGIN`` of its own method's noise (balls_b 0.41, statue 0.44; balls_a,
+street and road keep theirs), and never to equiangular.
 """
 from __future__ import annotations
 
