@@ -58,9 +58,8 @@ def _hide_media(scene) -> None:
                 obj.hide_render = True
 
 
-def open_with_auto_choice(scene_name: str):
-    """The example scene opened at its bench size with auto's choice at 16 spp set by hand
-    (``AUTO_RATE``, blue noise); (scene, blend path)."""
+def open_at_bench_size(scene_name: str):
+    """The example scene opened at its bench size (``SIZES``); (scene, blend path)."""
     import bpy
 
     blend = ROOT / "example_blends" / f"{scene_name}.blend"
@@ -68,6 +67,13 @@ def open_with_auto_choice(scene_name: str):
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = SIZES[scene_name]
     scene.render.resolution_percentage = 100
+    return scene, blend
+
+
+def open_with_auto_choice(scene_name: str):
+    """The example scene opened at its bench size with auto's choice at 16 spp set by hand
+    (``AUTO_RATE``, blue noise); (scene, blend path)."""
+    scene, blend = open_at_bench_size(scene_name)
     scene.cycles.volume_biased = True
     if AUTO_RATE[scene_name] is not None:
         scene.cycles.volume_step_rate = AUTO_RATE[scene_name]

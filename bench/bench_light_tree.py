@@ -23,16 +23,14 @@ from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_denoise_guides import cached_reference, errors, run_scenes  # noqa: E402
-from bench_estimator import ROOT, SIZES, chosen_scenes, scene_arguments  # noqa: E402
+from bench_denoise_guides import cached_reference, errors, open_at_bench_size, run_scenes  # noqa: E402
+from bench_estimator import SIZES, chosen_scenes, scene_arguments  # noqa: E402
 
 SCENES = ("balls_a", "balls_b", "statue", "road")
 COUNTS = (4, 16, 32)
 
 
 def measure(scene_name: str, repeats: int) -> list[str]:
-    import bpy
-
     from xsl_render.addon.cycles.denoise import denoise
     from xsl_render.addon.cycles.selective_render import apply_estimator
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
@@ -40,11 +38,7 @@ def measure(scene_name: str, repeats: int) -> list[str]:
     from xsl_render.addon.scene.state import preserved_scene
     from xsl_render.core.sampling.render_options import RenderOptions
 
-    blend = ROOT / "example_blends" / f"{scene_name}.blend"
-    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = SIZES[scene_name]
-    scene.render.resolution_percentage = 100
+    scene, blend = open_at_bench_size(scene_name)
     reference = cached_reference(scene, blend, scene_name, "bench_light_tree")
     options = RenderOptions(max_spp=64, estimator="auto").check()
     lines = [f"\n{scene_name} ({SIZES[scene_name][0]}x{SIZES[scene_name][1]}), {repeats} seed(s), "

@@ -20,16 +20,14 @@ from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_denoise_guides import cached_reference, errors, main_at_spp  # noqa: E402
-from bench_estimator import ROOT, SIZES  # noqa: E402
+from bench_denoise_guides import cached_reference, errors, open_at_bench_size, main_at_spp  # noqa: E402
+from bench_estimator import SIZES  # noqa: E402
 
 SCENES = ("balls_b", "balls_a", "statue", "road", "street")
 METHODS = ("MULTIPLE_IMPORTANCE", "DISTANCE", "EQUIANGULAR")
 
 
 def measure(scene_name: str, repeats: int, spp: int) -> list[str]:
-    import bpy
-
     from xsl_render.addon.cycles.denoise import denoise
     from xsl_render.addon.cycles.selective_render import apply_estimator
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
@@ -38,11 +36,7 @@ def measure(scene_name: str, repeats: int, spp: int) -> list[str]:
     from xsl_render.addon.scene.state import preserved_scene
     from xsl_render.core.sampling.render_options import RenderOptions
 
-    blend = ROOT / "example_blends" / f"{scene_name}.blend"
-    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = SIZES[scene_name]
-    scene.render.resolution_percentage = 100
+    scene, blend = open_at_bench_size(scene_name)
     reference = cached_reference(scene, blend, scene_name, "bench_scatter_sampling")
     auto = choose_estimator(scene, RenderOptions(max_spp=64, estimator="auto").check(), spp)
     noise = auto.scatter_noise or {}

@@ -48,21 +48,16 @@ W, H = 40, 24
 
 def _thick_box(blender):
     """A dense fog box filling the frame, lit by a lamp far above it: distance's case."""
-    scene = blender.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = W, H
-    scene.render.resolution_percentage = 100
-    camera = blender.data.objects.new("Cam", blender.data.cameras.new("Cam"))
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-    camera.location, camera.rotation_euler = (0.0, -6.0, 2.0), (1.5708, 0.0, 0.0)
-    blender.ops.mesh.primitive_cube_add(size=4.0, location=(0.0, 0.0, 2.0))
+    from support.xmap_scenes import add, base_scene
+
+    scene = base_scene(blender, W, H, lens=50.0, location=(0.0, -6.0, 2.0), rotation=(90.0, 0.0, 0.0))
     fog = blender.data.materials.new("Fog")
     tree = fog.node_tree
     tree.nodes.remove(tree.nodes["Principled BSDF"])
     volume = tree.nodes.new("ShaderNodeVolumePrincipled")
     volume.inputs["Density"].default_value = 1.5
     tree.links.new(volume.outputs[0], tree.nodes["Material Output"].inputs["Volume"])
-    blender.context.object.data.materials.append(fog)
+    add(blender, "primitive_cube_add", fog, size=4.0, location=(0.0, 0.0, 2.0))
     lamp = blender.data.objects.new("Key", blender.data.lights.new("Key", "POINT"))
     lamp.data.energy = 200000.0
     lamp.location = (2.0, 0.0, 30.0)
