@@ -22,8 +22,8 @@ from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice,
                                                visible_bias)
 from ..scene.geometry import scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
-from .scatter_choice import scatter_sampling
 from ..scene.probe import camera_model, render_size
+from .scatter_choice import scatter_sampling
 from .zbuffer import cast_camera_rays
 
 #: Camera rays the prediction marches: its 95th percentile needs a few hundred; each costs
@@ -40,8 +40,10 @@ def choose_estimator(scene, options: RenderOptions, spp: float,
                      previous: EstimatorChoice | None = None) -> EstimatorChoice:
     """The volume estimator a run of ``spp`` samples per pixel renders with, and for auto the
     sample pattern (blue noise, its sequence rounded up to a power of two, where the file
-    carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``), and
-    the light tree (off where the scene has one light: ``core.sampling.light_tree``).
+    carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``), the
+    light tree (off where the scene has one light: ``core.sampling.light_tree``) and each
+    medium's volume sampling while it ray-marches (``core.media.scatter_sampling``; not held
+    from frame to frame in a range: a switch changes the noise's look, not the image).
 
     ``options.estimator`` other than auto is taken as given; auto predicts (``_volumes``),
     never trying a step rate above ``options.step_rate`` when one is given, and keeping
