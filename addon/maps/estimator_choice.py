@@ -20,7 +20,7 @@ from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, kept_null_scattering, per_medium_rates,
                                                visible_bias)
-from ..scene.geometry import scan_scene, step_setting
+from ..scene.geometry import media_by_carrier, scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
 from ..scene.probe import camera_model, render_size
 from .scatter_choice import scatter_sampling
@@ -120,15 +120,7 @@ def step_carriers(media) -> dict:
     """What carries each heterogeneous medium's step in Blender -> its media's indices:
     "material:<name>" (``volume_step_rate``, shared by the material's users) or
     "world:<name>" (``volume_step_size``). Homogeneous media take one exact step."""
-    groups: dict = {}
-    for index, medium in enumerate(media):
-        if not math.isfinite(medium_step(medium)):
-            continue
-        if medium.kind == "world":
-            groups.setdefault(f"world:{medium.name}", []).append(index)
-        elif medium.material is not None:
-            groups.setdefault(f"material:{medium.material}", []).append(index)
-    return {key: tuple(members) for key, members in groups.items()}
+    return media_by_carrier(media, keep=lambda medium: math.isfinite(medium_step(medium)))
 
 
 def _per_medium(choice: EstimatorChoice, media, measure, largest, previous) -> EstimatorChoice:

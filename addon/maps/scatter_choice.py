@@ -8,21 +8,14 @@ import numpy as np
 from ...core.media.ray_marching import extinction_at, ray_pieces
 from ...core.media.scatter_sampling import (MAX_PIECE_LENGTH, POINTS_PER_PIECE, chosen_method,
                                             combined_noise, ray_noise)
-from ..scene.geometry import step_setting
+from ..scene.geometry import media_by_carrier, step_setting
 
 #: Of the camera rays auto's step prediction samples, the scatter prediction takes every
 #: this-many-th: 200 of 600 kept each example scene's ratios within a few per cent of all
 #: 600's, for a third of the time (0.15-0.36 s with all).
 RAY_STRIDE = 3
+from ..scene.light_sampling import emits_sampled_light
 from ..scene.probe import find_lights
-
-
-def medium_carrier(medium) -> str | None:
-    """What carries a medium's sampling method in Blender: "world:<name>" or
-    "material:<name>" (None: neither), as ``addon.scene.geometry.step_setting`` reads it."""
-    if medium.kind == "world":
-        return f"world:{medium.name}"
-    return None if medium.material is None else f"material:{medium.material}"
 
 
 def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[dict, dict, dict]:
@@ -31,11 +24,7 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
     for all; from every ``RAY_STRIDE``-th of the sampled ``pixels``."""
     pixels = pixels[::RAY_STRIDE]
     positions, power = _sampled_point_lights(scene, depsgraph)
-    carriers: dict[str, list[int]] = {}
-    for index, medium in enumerate(media):
-        key = medium_carrier(medium)
-        if key is not None:
-            carriers.setdefault(key, []).append(index)
+    carriers = media_by_carrier(media)
     if not carriers or not len(power):
         return {}, {}, {}
     origins = rays.origins.reshape(-1, 3)[pixels]
@@ -71,7 +60,7 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
         order = np.argsort(t, kind="stable")
         for key, members in carriers.items():
             per_ray[key].append(ray_noise(t[order], rays_dt[r][order], total[span][order],
-                                          own[members, span].sum(axis=0)[order], points[span][order],
+                                          own[list(members), span].sum(axis=0)[order], points[span][order],
                                           positions, power))
     methods, noises, own = {}, {}, {}
     for key, rows in per_ray.items():
@@ -92,10 +81,9 @@ def _sampled_point_lights(scene, depsgraph) -> tuple[np.ndarray, np.ndarray]:
     for light in find_lights(scene, depsgraph):
         if light.kind == "SUN":
             continue
-        if light.kind == "MESH":
-            material = bpy.data.materials.get(light.extra.get("material", ""))
-            if material is None or material.cycles.emission_sampling == "NONE":
-                continue
+        material = bpy.data.materials.get(light.extra.get("material", "")) if light.kind == "MESH" else None
+        if light.kind == "MESH" and not emits_sampled_light(material):
+            continue
         positions.append(light.location)
         power.append(max(float(light.energy) * max(light.color), 0.0))
     return np.asarray(positions, np.float64).reshape(-1, 3), np.asarray(power, np.float64)

@@ -309,6 +309,22 @@ def _slot_material(ob, medium: VolumeMedium):
                  if slot.material is not None and slot.material.name == medium.material), None)
 
 
+def media_by_carrier(media, keep=None) -> dict:
+    """What carries each medium's own settings in Blender -> the indices of its media:
+    "world:<name>" (the world's Cycles settings) or "material:<name>" (the material's,
+    shared by its users); media without either, or that ``keep(medium)`` refuses, left out.
+    ``step_setting`` reads a key's settings."""
+    groups: dict = {}
+    for index, medium in enumerate(media):
+        if keep is not None and not keep(medium):
+            continue
+        if medium.kind == "world":
+            groups.setdefault(f"world:{medium.name}", []).append(index)
+        elif medium.material is not None:
+            groups.setdefault(f"material:{medium.material}", []).append(index)
+    return {key: tuple(members) for key, members in groups.items()}
+
+
 def step_setting(key: str) -> tuple[object, str]:
     """Where the step of the media a key of ``estimator_choice.step_carriers`` names is set:
     (the world's Cycles settings, "volume_step_size") for "world:<name>", (the material's,

@@ -24,7 +24,7 @@ def sampled_lights(scene, depsgraph) -> int:
             continue
         if ob.type == "LIGHT":
             count += 1
-        elif ob.type in _SURFACE_TYPES and any(_emits(slot.material) for slot in ob.material_slots):
+        elif ob.type in _SURFACE_TYPES and any(emits_sampled_light(slot.material) for slot in ob.material_slots):
             polygons = len(ob.data.polygons) if ob.type == "MESH" else 2
             count += max(polygons, 1)
         if count > 1:
@@ -52,7 +52,7 @@ def world_is_sampled(world) -> bool:
     return False
 
 
-def _emits(material) -> bool:
+def emits_sampled_light(material) -> bool:
     """Whether Cycles samples ``material``'s surface as a light."""
     if material is None or material.node_tree is None or material.cycles.emission_sampling == "NONE":
         return False
