@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from xsl_render.core.media.scatter_sampling import (BOTH, DISTANCE, DISTANCE_MARGIN, EQUIANGULAR, chosen_method,
-                                                    combined_noise, ray_noise)
+from xsl_render.core.media.scatter_sampling import (BOTH, DISTANCE, DISTANCE_MARGIN, EQUIANGULAR, Segments,
+                                                    chosen_methods, ray_noise, stack_method)
 
 
 def _ray(sigma: np.ndarray, light: tuple[float, float, float], length: float = 10.0):
@@ -32,15 +32,78 @@ def test_the_prediction_ranks_the_method_whose_pdf_follows_the_integrand_first(s
     assert noise[BOTH] < max(noise[DISTANCE], noise[EQUIANGULAR])     # the mixture is never the worst
 
 
-def test_distance_replaces_the_own_method_only_by_the_margin():
-    assert chosen_method({DISTANCE: 0.2, EQUIANGULAR: 1.0, BOTH: 0.6}, BOTH) == DISTANCE
-    assert chosen_method({DISTANCE: 0.31, EQUIANGULAR: 0.09, BOTH: 0.2}, BOTH) is None
-    assert chosen_method({DISTANCE: DISTANCE_MARGIN * 0.6, EQUIANGULAR: 1.0, BOTH: 0.6}, BOTH) is None
-    assert chosen_method({DISTANCE: 0.2, EQUIANGULAR: 1.0, BOTH: 0.6}, DISTANCE) is None
-    assert chosen_method({}, BOTH) is None
-    both = combined_noise([({DISTANCE: 1.0, EQUIANGULAR: 1.0, BOTH: 1.0}, 3.0),
-                           ({DISTANCE: 3.0, EQUIANGULAR: 0.0, BOTH: 1.0}, 1.0), ({}, 0.0)])
-    assert both[BOTH] == pytest.approx(1.0) and both[DISTANCE] == pytest.approx(np.sqrt(3.0))
+@pytest.mark.parametrize("methods, expected", [
+    ((), None), ((DISTANCE,), DISTANCE), ((EQUIANGULAR, EQUIANGULAR), EQUIANGULAR),
+    ((DISTANCE, EQUIANGULAR), BOTH), ((DISTANCE, BOTH), BOTH), ((DISTANCE, DISTANCE), DISTANCE),
+])
+def test_a_segment_samples_with_the_union_of_its_stacks_methods(methods, expected):
+    assert stack_method(methods) == expected
+
+
+def _segments(members, moments, integral=1.0, carriers=("material:Fog", "world:W")):
+    """Synthetic segments: one per row of ``members``, each its own ray."""
+    rows = len(members)
+    return Segments(list(carriers), np.arange(rows), np.full(rows, integral),
+                    np.asarray(moments, float).reshape(rows, 3), np.asarray(members, bool))
+
+
+def test_a_fog_box_inside_world_fog_switches_only_with_the_world():
+    """Inside a world fog sampled equiangular, a fog box's distance gives both (Cycles'
+    union): its switch alone changes nothing, and auto switches the two together."""
+    # distance / equiangular / both second moments: distance far the least noisy
+    segments = _segments([[True, True]], [1.1, 5.0, 2.0])
+    own = {"material:Fog": BOTH, "world:W": EQUIANGULAR}
+    methods, noises = chosen_methods(segments, own)
+    assert noises["material:Fog"][DISTANCE] == pytest.approx(noises["material:Fog"][BOTH])
+    assert methods == {"material:Fog": DISTANCE, "world:W": DISTANCE}
+    # The box alone (no world around it) switches alone.
+    alone = _segments([[True, False]], [1.1, 5.0, 2.0])
+    assert chosen_methods(alone, own)[0] == {"material:Fog": DISTANCE}
+
+
+def test_distance_is_taken_only_by_the_margin_and_never_for_nothing():
+    own = {"material:Fog": BOTH, "world:W": EQUIANGULAR}
+    # distance predicted at 0.7 / 0.6 of both's noise (relative variance 0.5): kept / switched
+    kept = _segments([[True, False]], [1.0 + 0.49 * 0.5, 3.0, 1.5])
+    assert chosen_methods(kept, own)[0] == {} and 0.6 < DISTANCE_MARGIN < 0.7
+    assert chosen_methods(_segments([[True, False]], [1.0 + 0.36 * 0.5, 3.0, 1.5]), own)[0] == {"material:Fog": DISTANCE}
+    # a medium that gathers no light (absorption only) gives no reason to switch
+    dark = _segments([[True, False]], [0.0, 0.0, 0.0], integral=0.0)
+    assert chosen_methods(dark, own)[0] == {}
+    # own methods at distance already: nothing to switch
+    assert chosen_methods(_segments([[True, False]], [1.1, 5.0, 2.0]),
+                          {"material:Fog": DISTANCE, "world:W": DISTANCE})[0] == {}
+
+
+def test_the_frame_noise_sums_a_rays_segments_variances():
+    # one ray of two segments (each gathering 1) against two rays of one
+    two = Segments(["material:Fog"], np.array([0, 0]), np.ones(2), np.array([[2.0, 2.0, 2.0]] * 2),
+                   np.ones((2, 1), bool))
+    assert two.noise({"material:Fog": DISTANCE}) == pytest.approx(np.sqrt(2.0 / 4.0))
+    apart = Segments(["material:Fog"], np.array([0, 1]), np.ones(2), np.array([[2.0, 2.0, 2.0]] * 2),
+                     np.ones((2, 1), bool))
+    assert apart.noise({"material:Fog": DISTANCE}) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("node_type, color, scattering", [
+    ("VOLUME_SCATTER", (0.8, 0.8, 0.8), 0.8),
+    ("VOLUME_ABSORPTION", (0.2, 0.2, 0.2), 0.0),
+    ("PRINCIPLED_VOLUME", (0.5, 0.5, 0.5), 0.5),
+])
+def test_only_the_scattering_part_gathers_light(node_type, color, scattering):
+    """The prediction's integrand is a medium's scattering coefficient: an absorbing medium
+    gathers no light whatever its extinction."""
+    from xsl_render.core.media.shader_graph import Node, ShaderGraph
+    from xsl_render.core.media.shader_link import Link
+    from xsl_render.core.media.volume_medium import VolumeMedium
+
+    node = Node(type=node_type, name="v", inputs={"Density": 1.0, "Color": color, "Absorption Color": (0, 0, 0)},
+                input_kinds={"Density": "VALUE", "Color": "RGBA", "Absorption Color": "RGBA"})
+    medium = VolumeMedium(key="m", name="m", kind="mesh", material="m",
+                          graph=ShaderGraph(nodes={"v": node}, root=Link("v", "Volume", "SHADER")))
+    points = np.zeros((4, 3))
+    assert np.allclose(medium.extinction(points, "scattering"), scattering)
+    assert medium.extinction(points).mean() >= scattering
 
 
 W, H = 40, 24
@@ -73,30 +136,12 @@ def _thin_world(blender):
     return scene, f"world:{scene.world.name}"
 
 
-def _cycles_noise(blender, scene, key: str, method: str, seeds: int = 6) -> float:
-    """Cycles' own relative noise with ``method`` on the medium ``key``: the pixels' variance
-    over seeds (4 spp, ray marching, no denoising) over their mean squared."""
-    from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer, forget_synced_session
-    from xsl_render.addon.scene.geometry import step_setting
-    from xsl_render.addon.scene.state import preserved_scene
-
-    renders = []
-    for seed in range(seeds):
-        forget_synced_session()
-        with preserved_scene(scene):
-            scene.cycles.volume_biased = True
-            step_setting(key)[0].volume_sampling = method
-            with CyclesWindowRenderer(scene, seed) as renderer:
-                renders.append(renderer.render(None, 4).pixels[..., :3].mean(axis=2))
-    stack = np.stack(renders)
-    return float(stack.var(axis=0).mean() / max(stack.mean() ** 2, 1e-12))
-
-
 @pytest.mark.blender
 @pytest.mark.render
 @pytest.mark.parametrize("build, chosen", [(_thick_box, DISTANCE), (_thin_world, None)],
                          ids=["thick box, far light", "thin world fog, lamps"])
 def test_auto_takes_distance_sampling_where_cycles_renders_it_with_less_noise(blender, build, chosen):
+    from support.scatter_oracle import cycles_noise
     from xsl_render.addon.maps.estimator_choice import choose_estimator
     from xsl_render.core.sampling.render_options import RenderOptions
 
@@ -107,7 +152,7 @@ def test_auto_takes_distance_sampling_where_cycles_renders_it_with_less_noise(bl
     # Cycles ranks the three methods as the prediction does (measured: thick box 0.008 /
     # 0.034 / 0.114 for distance / both / equiangular, predicted 0.006 / 0.57 / 1.34; thin
     # world fog 0.39 / 0.16 / 0.09, predicted 3.6 / 1.2 / 0.75).
-    rendered = {method: _cycles_noise(blender, scene, key, method) for method in (DISTANCE, EQUIANGULAR, BOTH)}
+    rendered = {method: cycles_noise(blender, scene, {key: method}) for method in (DISTANCE, EQUIANGULAR, BOTH)}
     assert sorted(rendered, key=rendered.get) == sorted(noise, key=noise.get)
 
 

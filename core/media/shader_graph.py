@@ -121,22 +121,23 @@ class GraphEvaluator:
         return outputs[link.socket]
 
     # --- closures -------------------------------------------------------------------
-    def extinction(self) -> np.ndarray:
-        """Extinction coefficient (N, 3) at the context's points."""
+    def extinction(self, part: str = "extinction") -> np.ndarray:
+        """Extinction coefficient (N, 3) at the context's points; with ``part`` "scattering",
+        only its scattering part (what in-scatters light; absorption left out)."""
         n = len(self.context.points)
         if self.graph.root is None:
             return np.zeros((n, 3), np.float32)
-        total = self._closure(self.graph.root, np.ones(n, np.float32))
+        total = self._closure(self.graph.root, np.ones(n, np.float32), part)
         return np.broadcast_to(total, (n, 3)).astype(np.float32)
 
-    def _closure(self, link: Link, weight: np.ndarray):
+    def _closure(self, link: Link, weight: np.ndarray, part: str):
         node = self.graph.nodes[link.node]
         if node.type == "ADD_SHADER":
             out = 0.0
             for key in ("Shader", "Shader_001"):
                 child = node.inputs.get(key)
                 if isinstance(child, Link):
-                    out = out + self._closure(child, weight)
+                    out = out + self._closure(child, weight, part)
             return out
         if node.type == "MIX_SHADER":
             fac = np.clip(self.input(node, "Fac"), 0.0, 1.0)
@@ -144,17 +145,18 @@ class GraphEvaluator:
             for key, w in (("Shader", 1.0 - fac), ("Shader_001", fac)):
                 child = node.inputs.get(key)
                 if isinstance(child, Link):
-                    out = out + self._closure(child, weight * w)
+                    out = out + self._closure(child, weight * w, part)
             return out
         if node.type in NON_EXTINCTION_CLOSURES:
             return 0.0
         if node.type not in VOLUME_CLOSURES:
             raise ValueError(f"{node.name} ({node.type}) is not a volume shader")
-        return closure_extinction_field(self, node, weight)
+        return closure_extinction_field(self, node, weight, part)
 
 
-def closure_extinction_field(ev: GraphEvaluator, node: Node, weight) -> np.ndarray:
-    """Extinction of one volume closure node, as Cycles' SVM computes it.
+def closure_extinction_field(ev: GraphEvaluator, node: Node, weight, part: str = "extinction") -> np.ndarray:
+    """Extinction of one volume closure node, as Cycles' SVM computes it (``part``
+    "scattering": its scattering coefficient alone).
 
     Density is clamped at zero (``fmaxf(density, 0)``); colours are not clamped except
     where Cycles clamps them. Principled Volume takes the square root of the absorption
@@ -164,7 +166,7 @@ def closure_extinction_field(ev: GraphEvaluator, node: Node, weight) -> np.ndarr
     if node.type == "VOLUME_COEFFICIENTS":
         absorption = ev.input(node, "Absorption Coefficients")
         scatter = ev.input(node, "Scatter Coefficients")
-        return weight[..., None] * (absorption + scatter)
+        return weight[..., None] * (scatter if part == "scattering" else absorption + scatter)
     density = weight * np.maximum(np.nan_to_num(ev.input(node, "Density", 1.0)), 0.0)
     color = ev.input(node, "Color", (1.0, 1.0, 1.0))
     if node.type == "PRINCIPLED_VOLUME":
@@ -179,17 +181,18 @@ def closure_extinction_field(ev: GraphEvaluator, node: Node, weight) -> np.ndarr
     if node.type == "VOLUME_SCATTER":
         return density[..., None] * color
     if node.type == "VOLUME_ABSORPTION":
-        return density[..., None] * (1.0 - color)
+        return density[..., None] * (0.0 if part == "scattering" else 1.0 - color)
     # PRINCIPLED_VOLUME
     absorption_color = np.sqrt(np.maximum(ev.input(node, "Absorption Color"), 0.0))
     absorption = np.maximum(1.0 - color, 0.0) * np.maximum(1.0 - absorption_color, 0.0)
-    extinction = density[..., None] * (color + absorption)
+    extinction = density[..., None] * (color if part == "scattering" else color + absorption)
     return np.where((density > CLOSURE_WEIGHT_CUTOFF)[..., None], extinction, 0.0)
 
 
-def evaluate_extinction(graph: ShaderGraph, context: NodeContext) -> np.ndarray:
-    """Extinction coefficients (N, 3) of ``graph`` at ``context.points``, finite and >= 0
-    wherever Cycles would give a usable value (NaN counts as no medium, as Cycles'
-    ``fmaxf`` makes it; infinities become a very large finite value)."""
-    extinction = GraphEvaluator(graph, context).extinction()
+def evaluate_extinction(graph: ShaderGraph, context: NodeContext, part: str = "extinction") -> np.ndarray:
+    """Extinction coefficients (N, 3) of ``graph`` at ``context.points`` (``part``
+    "scattering": their scattering part), finite and >= 0 wherever Cycles would give a
+    usable value (NaN counts as no medium, as Cycles' ``fmaxf`` makes it; infinities become
+    a very large finite value)."""
+    extinction = GraphEvaluator(graph, context).extinction(part)
     return np.nan_to_num(extinction, nan=0.0, posinf=1e30, neginf=-1e30)

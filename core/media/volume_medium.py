@@ -66,9 +66,10 @@ class VolumeMedium:
             return None
         return evaluate_extinction(self.graph, self.context(np.zeros((1, 3))))[0].astype(np.float64)
 
-    def extinction(self, points: np.ndarray) -> np.ndarray:
-        """Extinction (N, 3) at world-space points."""
-        extinction = evaluate_extinction(self.graph, self.context(points))
+    def extinction(self, points: np.ndarray, part: str = "extinction") -> np.ndarray:
+        """Extinction (N, 3) at world-space points (``part`` "scattering": its scattering
+        part, what in-scatters the lights' light)."""
+        extinction = evaluate_extinction(self.graph, self.context(points), part)
         if self.density_scale != 1.0:
             extinction = extinction * self.density_scale
         if self.region is not None:
