@@ -6,17 +6,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from xsl_render.core.media.scatter_sampling import (BOTH, DISTANCE, DISTANCE_MARGIN, EQUIANGULAR, Segments,
-                                                    chosen_methods, ray_noise, stack_method)
+from xsl_render.core.media.scatter_sampling import (BOTH, DISTANCE, DISTANCE_MARGIN, EQUIANGULAR, METHODS, Lights,
+                                                    Segments, chosen_methods, segment_moments, stack_method)
 
 
 def _ray(sigma: np.ndarray, light: tuple[float, float, float], length: float = 10.0):
-    """A ray along +x from the origin through ``sigma`` (per point), one light at ``light``."""
+    """({method: relative noise of one sample}, the integral) along a ray on +x from the origin
+    through ``sigma`` (per point), one segment, one light at ``light``."""
     n = len(sigma)
     t = (np.arange(n) + 0.5) / n * length
     dt = np.full(n, length / n)
     points = np.stack([t, np.zeros(n), np.zeros(n)], axis=1)
-    return ray_noise(t, dt, sigma, sigma, points, np.array([light], float), np.array([100.0]))
+    integral, moments = segment_moments(t, dt, sigma, sigma, points,
+                                        Lights(np.array([light], float), np.array([100.0])))
+    noise = {m: np.sqrt(max(moments[i] / integral ** 2 - 1.0, 0.0)) for i, m in enumerate(METHODS)}
+    return noise, integral
 
 
 @pytest.mark.parametrize("sigma, light, best", [

@@ -140,26 +140,17 @@ def segment_moments(t: np.ndarray, dt: np.ndarray, sigma_t: np.ndarray, sigma_s:
         f = sigma_s * transmittance * g * power * lights.spread(index, points)
         p_equiangular = g / float((g * dt).sum())
         integral += float((f * dt).sum())
-        for index, pdf in enumerate((p_distance, p_equiangular, 0.5 * (p_distance + p_equiangular))):
-            moments[index] += float((f * f / np.maximum(pdf, 1e-30) * dt).sum()) / chance
+        for column, pdf in enumerate((p_distance, p_equiangular, 0.5 * (p_distance + p_equiangular))):
+            moments[column] += float((f * f / np.maximum(pdf, 1e-30) * dt).sum()) / chance
     return integral, moments
-
-
-def ray_noise(t: np.ndarray, dt: np.ndarray, sigma_t: np.ndarray, sigma_s: np.ndarray,
-              points: np.ndarray, light_positions: np.ndarray, light_power: np.ndarray) -> tuple[dict, float]:
-    """({method: relative noise of one sample}, the integral) of single scattering along one
-    ray in one segment (``segment_moments``)."""
-    integral, moments = segment_moments(t, dt, sigma_t, sigma_s, points,
-                                        Lights(np.asarray(light_positions, float), np.asarray(light_power, float)))
-    if integral <= 0.0:
-        return {}, 0.0
-    return {m: math.sqrt(max(moments[i] / integral ** 2 - 1.0, 0.0)) for i, m in enumerate(METHODS)}, integral
 
 
 #: Cycles' method bits (``VolumeSampleMethod``): a segment inside several media samples with
 #: the union of their methods, so distance and equiangular together give both.
 METHOD_BITS = {DISTANCE: 1, EQUIANGULAR: 2, BOTH: 3}
-_BY_BITS = {1: 0, 2: 1, 3: 2}
+#: The column of ``METHODS`` (and of ``segment_moments``' moments) for each union of bits (a
+#: segment with no medium on its stack gathers nothing; any column does).
+_COLUMN_OF_BITS = np.array([2, 0, 1, 2])
 
 
 def stack_method(methods) -> str | None:
@@ -169,7 +160,7 @@ def stack_method(methods) -> str | None:
     bits = 0
     for method in methods:
         bits |= METHOD_BITS[method]
-    return METHODS[_BY_BITS[bits]] if bits else None
+    return METHODS[_COLUMN_OF_BITS[bits]] if bits else None
 
 
 @dataclass
@@ -194,7 +185,7 @@ class Segments:
             return 0.0
         bits = np.array([METHOD_BITS[methods[c]] for c in self.carriers], np.int64)
         stacked = np.bitwise_or.reduce(np.where(self.members, bits[None, :], 0), axis=1)
-        column = np.array([_BY_BITS.get(int(b), 2) for b in range(4)])[stacked]
+        column = _COLUMN_OF_BITS[stacked]
         variance = self.moments[np.arange(len(self.ray)), column] - self.integral ** 2
         rays, where = np.unique(self.ray, return_inverse=True)
         gathered = np.bincount(where, self.integral, len(rays))
