@@ -24,13 +24,13 @@ def test_a_range_raises_its_count_to_the_power_of_two_its_allowance_reaches(coun
 
 @pytest.mark.parametrize("held, affordable, frame, count", [
     (16, 16, 16, 16), (16, 14, 16, 16), (16, 13, 16, 13),   # held down to 85 % of the count before
-    (16, 31, 31, 16), (16, 32, 32, 32), (16, 47, 40, 32),   # raised at twice it, where the frame
-    (16, 32, 21, 16), (16, 47, 23.5, 16),                   # affords it too: not the slack of a
-    (4, 29, 18, 16), (4, 20, 20, 16),                       # rounding down; to the frame's count
-    (16, 40, 25, 25), (16, 40, 23, 16),                     # the frame past 1.5x it: priced too dear
+    (16, 32, 21, 16), (16, 47, 23.5, 16), (16, 40, 23, 16),  # the slack of a rounding down: held
+    (16, 31, 31, 31), (16, 32, 32, 32), (16, 47, 40, 32),   # the frame affords more: priced too
+    (4, 29, 18, 29), (4, 20, 20, 16), (16, 40, 25, 32),     # dear, the later columns spend the
+    (55, 95, 80, 95), (55, 60, 56, 60), (55, 95, 55, 55),   # time the first left
     (8, 5, 8, 4), (12, 12, 12, 12), (12, 30, 30, 30), (1, 1, 1, 1), (1, 3, 3, 3), (16, 11, 16, 8),
 ])
-def test_later_columns_of_a_flat_pass_hold_one_count_unless_the_whole_frame_affords_twice_it(
+def test_later_columns_of_a_flat_pass_hold_one_count_unless_the_first_was_priced_too_dear(
         held, affordable, frame, count):
     assert column_count(held, affordable, frame) == count
 

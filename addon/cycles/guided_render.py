@@ -31,8 +31,8 @@
    few tens of milliseconds misjudge a full frame's cost per pixel by up to 2x, either way:
    their timing noise); the
    later columns keep the count before them while the clock allows, raised only where the
-   whole frame affords more than a rounding down to it leaves (``column_count``: one count
-   per frame), and a count up to
+   pilot priced the first too dear (``column_count``: the later columns spend the time it
+   left), and a count up to
    1.5x a power of two renders at it
    (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
    of the whole frame stopped by Cycles' own time limit instead of the columns was measured
@@ -404,14 +404,15 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                         # (no frame before: a fresh count, raised as the allowance allows).
                         spp = pace.steady_count(spp, options.max_spp, rate * width * height, renderer.sequence())
                     elif final.flat:
-                        # One count for the whole frame while the clock allows, raised only
-                        # where the whole frame affords it at the cost the columns measured
+                        # One count for the whole frame while the clock allows; the column
+                        # after the first spends what a first column priced too dear left
                         # (``column_count``).
                         frame_affordable = final_seconds / (frame_sample_s * pacer.cost_ratio)
                         # (A count below one the session rendered is not rounded down:
                         # ``sobol_friendly``.)
                         spp = (first_column_count(spp, frame_sample_s, renderer.sequence()) if held is None
-                               else column_count(held, spp, frame_affordable, renderer.sequence()))
+                               else column_count(held, spp, frame_affordable, renderer.sequence(),
+                                                 priced_by_pilot=index == 1))
                         held = spp
                     seconds = keep(rect.window, renderer.render(rect.window, spp), spp)
                     pacer.record(seconds, rate * spp * rect.area)

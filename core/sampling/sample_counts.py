@@ -59,39 +59,47 @@ def sobol_friendly(count: int, sequence: int = 0) -> int:
 HOLD_RANGE = (0.85, 1.3)
 
 
-def column_count(held: int, affordable: float, frame_affordable: float, sequence: int = 0) -> int:
+def column_count(held: int, affordable: float, frame_affordable: float, sequence: int = 0,
+                 priced_by_pilot: bool = True) -> int:
     """The count of a flat pass's later column: ``held`` (the count of the columns before it);
     ``sobol_friendly(affordable, sequence)`` where the column affords less than ``HOLD_RANGE[0]`` of it;
-    more only where the column affords twice it and the whole frame ``POWER_OF_TWO_SLACK``
-    times it (more than a rounding down to ``held`` leaves).
+    more, ``sobol_friendly(affordable)``, only where the first column was priced too dear:
+    ``held`` was the pilot's price (``priced_by_pilot``: the column after the first) and the
+    whole frame affords more than it beyond a rounding down to it. The column after that
+    holds the count the clock set (raised again, a last column took every second left and
+    ran 1.1x over its 4-s budget where the clock's 30 % noise slowed it).
 
     ``affordable``: the column's count by the clock (the time left over the columns left);
     ``frame_affordable``: the count the whole final pass would have afforded at the cost per
-    sample its finished columns measured. A column affords twice the count before it in two
-    ways. Either the first column was priced too dear (balls_b's columns came out 4 / 16 / 29):
-    then the frame affords more than ``sobol_friendly`` would have rounded down to it, and the
-    columns after it take the frame's count, ``sobol_friendly(min(affordable,
-    frame_affordable))`` (holding there instead left a 4-s test run at 62 % of its budget). Or the
-    columns before it were rounded down (``sobol_friendly``: 20 affordable, 16 rendered) and
-    their slack all fell to the last column (road at 14.1 s: 16 / 16 / 32, 14.4 s): then
-    the frame does not, and the column holds. Road at a 14.1-s budget (2026-11-28): raised,
-    16 / 16 / 32 spp in 14.4 s, mean FLIP 0.0384, p95 region FLIP 0.0642, MSE 4.69e-5; held,
-    16 / 16 / 16 in 10.8-12.2 s (5 runs), 0.0400, 0.0642, 4.72e-5. The raise bought 4 % of mean
-    FLIP and nothing else for a quarter more time, less than uniform sampling gains in it (on
-    the demo's uniform curve 1.00x against 1.11x at equal mean FLIP), and left the frame
-    uneven; held, the frame ends early.
+    sample its finished columns measured. A column affords more than the count before it in
+    two ways. Either the columns before it were rounded down (``sobol_friendly``: 20
+    affordable, 16 rendered) and their slack all fell to the last column (road at 14.1 s: 16
+    / 16 / 32, 14.4 s): then ``sobol_friendly(frame_affordable)`` is ``held``, and the column
+    holds. Road at a 14.1-s budget (2026-11-28): raised, 16 / 16 / 32 spp in 14.4 s, mean
+    FLIP 0.0384, p95 region FLIP 0.0642, MSE 4.69e-5; held, 16 / 16 / 16 in 10.8-12.2 s (5
+    runs), 0.0400, 0.0642, 4.72e-5. The raise bought 4 % of mean FLIP and nothing else for a
+    quarter more time, less than uniform sampling gains in it (on the demo's uniform curve
+    1.00x against 1.11x at equal mean FLIP), and left the frame uneven; held, the frame ends
+    early. Or the pilot priced the first column too dear (balls_b's columns came out 4 / 16 /
+    29; a quarter-resolution pilot of 64 x 36 pixels misjudged a full-resolution sample up to
+    2x, its per-sample cost in Cycles being mostly fixed): the first column is rendered by
+    then, and the later ones spend the time it left (the test fog at 96 x 54 pixels and 4 s
+    took 32 / 85 / 85 spp in 2.5 s, 0.62 of its budget, and 55 / 55 / 55 in 2.9 s when the
+    later columns held, where their clock afforded 95).
 
-    One frame at one count: the pilot's timing is noisy at small budgets (a quarter-resolution
-    render of a few samples in ~0.07 s), and the columns paced after a misjudged first one
-    came out uneven, which scored worse than their mean count (balls_a at uniform 16 spp's
-    time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp, mean FLIP 0.0564 / 0.0445 /
-    0.0375; ``docs/bench_sample_pattern.txt``). Holding costs at most the held count beyond
-    what a column affords by the clock (the budget's 15 %) or leaves what the rounding down
-    saved unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
+    One frame at one count where the clock allows: the pilot's timing is noisy at small
+    budgets (a quarter-resolution render of a few samples in ~0.07 s), and the columns paced
+    after a misjudged first one came out uneven, which scored worse than their mean count
+    (balls_a at uniform 16 spp's time, blue noise: columns averaging 14.3 / 15.3 / 16.0 spp,
+    mean FLIP 0.0564 / 0.0445 / 0.0375; ``docs/bench_sample_pattern.txt``). That compares
+    frames of equal total; once a first column is rendered below the frame's count, more
+    samples in the later ones only lower their error. Holding costs at most the held count
+    beyond what a column affords by the clock (the budget's 15 %) or leaves what the rounding
+    down saved unspent (a count between two powers of two buys little, ``sobol_friendly``)."""
     if affordable < HOLD_RANGE[0] * held:
         return sobol_friendly(int(affordable), sequence)
-    if affordable >= 2 * held and frame_affordable >= POWER_OF_TWO_SLACK * held:
-        return max(held, sobol_friendly(int(min(affordable, frame_affordable)), sequence))
+    if priced_by_pilot and sobol_friendly(int(frame_affordable), sequence) > held:
+        return max(held, sobol_friendly(int(affordable), sequence))
     return held
 
 
