@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from xsl_render.core.sampling.sample_counts import BUDGET_OVERRUN, HOLD_RANGE
-from xsl_render.core.sampling.sequence_budget import (LAST_FRAMES_UNRAISED, MIN_FRAME_SHARE, RATE_WINDOW,
-                                                      SequenceBudget)
+from xsl_render.core.sampling.sequence_budget import (LAST_FRAMES_UNRAISED, MIN_FRAME_SHARE, PILOT_MISPRICED,
+                                                      RATE_WINDOW, SequenceBudget)
 
 
 def test_a_sequence_pays_its_first_frames_sync_back_over_the_rest():
@@ -62,6 +62,20 @@ def test_a_range_does_not_raise_its_count_in_its_last_frames(done, affordable, c
     sequence.observe(3.2, 1.6e7, 16)
     for _ in range(done):
         sequence.record(4.0)
+    assert sequence.steady_count(affordable, 4096, 0.2) == count
+
+
+@pytest.mark.parametrize("frames, done, affordable, count", [
+    (2, 1, 33.0, 32), (2, 1, 64.0, 64), (2, 1, 31.0, 16),   # the second frame: the pilot's price
+    (3, 1, 50.0, 50), (3, 2, 50.0, 16), (4, 2, 60.0, 16)])  # undone at twice it, not later
+def test_a_ranges_second_frame_undoes_a_first_frame_its_pilot_priced_too_dear(frames, done, affordable,
+                                                                              count):
+    assert PILOT_MISPRICED == 2.0
+    # Frames of 4 s, a sample per pixel of the frame 0.2 s; the first frame rendered 16.
+    sequence = SequenceBudget(per_frame=4.0, frames=frames)
+    sequence.observe(3.2, 1.6e7, 16)
+    for _ in range(done):
+        sequence.record(2.0)
     assert sequence.steady_count(affordable, 4096, 0.2) == count
 
 

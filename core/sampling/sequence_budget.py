@@ -18,12 +18,14 @@ RATE_WINDOW = 4
 #: frames at uniform 16 spp's time: 16 x22, then 32, 32 on what the held count had left
 #: unspent). A farm's chunk is a range, so every chunk would end on such a change.
 LAST_FRAMES_UNRAISED = 3
+#: A range's second frame may raise the first frame's count even among the last frames
+#: where it affords this many times it: the first frame's count is the pilot's price, the
+#: second's is measured (``steady_count``).
+PILOT_MISPRICED = 2.0
 #: A frame of a guided animation is never given less than this share of the per-frame budget,
 #: whatever the frames before it overran (a short sequence with a long first sync overruns
 #: its total instead of starving its frames).
 MIN_FRAME_SHARE = 0.5
-
-
 
 
 @dataclass
@@ -104,11 +106,16 @@ class SequenceBudget:
         changes the noise, which shows as flicker), else a fresh count at one Cycles'
         patterns like, within the frame's share (the first frame's, with no frame before);
         either raised to the power of two above it where the allowance reaches it. In the
-        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is.
+        range's last ``LAST_FRAMES_UNRAISED`` frames a count that fits is held as it is,
+        unless the frame before was the first, priced by its pilot, and this one affords
+        ``PILOT_MISPRICED`` times it (a 2-frame range at 64 x 36 pixels whose pilot had
+        priced its first frame at half its budget held that count and used 0.5 of its
+        budget; a count rounded down leaves at most 1.5x, ``sobol_friendly``).
         ``sequence``: the per-pixel sequence the range's Cycles session already draws from
         (``sobol_friendly``: a count below it is not rounded down)."""
         reach = affordable + self.allowance(frame_sample_seconds)
-        closing = self.frames - self.done <= LAST_FRAMES_UNRAISED
+        closing = (self.frames - self.done <= LAST_FRAMES_UNRAISED
+                   and not (self.done == 1 and affordable >= PILOT_MISPRICED * (self.spp or 0)))
         if self.spp and self.spp <= reach and (closing or affordable <= HOLD_RANGE[1] * self.spp):
             count = max(1, min(self.spp, ceiling))
             return count if closing else power_of_two_within(count, reach, ceiling)
