@@ -45,9 +45,10 @@ On random lit scenes (``bench/bench_scatter_random.py``, 90 seeds, 84 with a med
 could switch; ``docs/bench_scatter_random.txt``) the prediction is a poor judge of the gain
 but a safe one: auto switched 5, where Cycles rendered 0.95-1.06 of the own methods' pixel
 variance at equal samples (less than distance's cheaper sample pays back), and kept 7 where
-every medium at distance would have rendered 0.36-0.60 of it (misses; most likely the
-frame's noise lies there in what the model leaves out, such as the surfaces behind the fog,
-which a distance sample that crosses the segment carries instead). Before the volume stack, the
+every medium at distance would have rendered 0.36-0.60 of it (misses: there Cycles' own
+"both" under ray marching, one strategy per sample weighed by twice the power heuristic
+against distance's unnormalized density, renders 2-3x noisier than either strategy alone,
+where the balance heuristic modelled here puts it between them; README). Before the volume stack, the
 scattering part and the lights' spread were modelled, the same suite found a switched
 absorbing box (nothing to gather) and switches inside world fog that Cycles overruled
 (``docs/bench_scatter_random_before.txt``).
