@@ -263,6 +263,13 @@ def split_rects(rects: list[Rect], pieces: int) -> list[Rect]:
     return out
 
 
+#: A render of a plan weighted by scores or a map may take at most this many times its
+#: planned samples (``BudgetPacer``): a region cheaper than the pilot said must not take the
+#: time of one dearer than it said. So where the pilot priced a sample at more than this
+#: many times what the final pass paid, such a plan ends early in proportion.
+PACE_MAX_SCALE = 2.0
+
+
 class BudgetPacer:
     """Keeps a sequence of renders inside a time budget.
 
@@ -280,7 +287,7 @@ class BudgetPacer:
     budget unspent.
     """
 
-    def __init__(self, sample_seconds: list[float], overhead: float, max_scale: float = 2.0,
+    def __init__(self, sample_seconds: list[float], overhead: float, max_scale: float = PACE_MAX_SCALE,
                  side_by_side: bool = False):
         if any(seconds < 0 for seconds in sample_seconds) or overhead < 0:
             raise ValueError("planned seconds must not be negative")
