@@ -43,11 +43,19 @@ _swept: set[str] = set()
 _state = {"aborted": False, "sealed": False, "session": None, "saved_tempdir": None}
 
 
+#: The pid in a temporary's name is padded to this many digits (Linux's largest pid_max has
+#: 7), so the name is as long in every process: whether an output's name leaves room for its
+#: temporary, which the up-front checks ask, does not change with the pid. (Unpadded, a pid
+#: of 3 digits after the counter wrapped let a name through that a 5-digit one refused.)
+PID_DIGITS = 7
+
+
 def temporary_name(path: str | os.PathLike) -> Path:
     """A hidden name next to ``path`` that says whose it is: ``.NAME.<pid>-<token>.partial`` plus
     ``path``'s extension (writers such as OpenImageIO pick the format from it)."""
     path = Path(path)
-    return path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial{path.suffix}")
+    return path.with_name(f".{path.stem}.{os.getpid():0{PID_DIGITS}d}-{secrets.token_hex(4)}"
+                          f".partial{path.suffix}")
 
 
 @contextmanager

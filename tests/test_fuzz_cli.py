@@ -111,7 +111,7 @@ def issue_23_keys(root: Path) -> dict[str, str]:
     not, one whose temporary name (``.NAME.<pid>-<token>.partial.exr``) does not."""
     from xsl_render.core.temporaries import temporary_name
 
-    extra = len(temporary_name(root / "o.exr").name) - len("o.exr")     # grows with the pid
+    extra = len(temporary_name(root / "o.exr").name) - len("o.exr")     # the same in every process
     keys = {f"pipe_{suffix}": str(root / f"pipe_{suffix}.{suffix}") for suffix in ("blend", "exr", "json", "csv", "sqlite")}
     keys.update(pipe_maps=str(root / "pipe_maps"), pipe_stimuli=str(root / "pipe_stimuli"),
                 spp_too_long=str(root / ("s" * (255 - extra - 2 - 4) + ".exr")),       # _spp adds 4 bytes

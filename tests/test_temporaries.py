@@ -91,11 +91,21 @@ def test_every_map_set_has_the_same_files(tmp_path):
     assert sorted(tree(tmp_path / "lit")) == sorted(tree(tmp_path / "sky"))
 
 
+@pytest.mark.parametrize("pid", [7, 300, 32767, 4194304])
+def test_a_temporary_name_is_as_long_in_every_process(tmp_path, monkeypatch, pid):
+    # The up-front checks ask whether an output's name leaves room for its temporary: the
+    # answer must not change with the pid (a pid counter that wrapped gave 3 digits for 5).
+    expected = len(temporaries.temporary_name(tmp_path / "render.exr").name)
+    monkeypatch.setattr(temporaries.os, "getpid", lambda: pid)
+    assert len(temporaries.temporary_name(tmp_path / "render.exr").name) == expected
+
+
 def test_temporaries_say_whose_they_are(tmp_path):
     name = temporaries.temporary_name(tmp_path / "render.exr").name
-    assert name.startswith(f".render.{os.getpid()}-") and name.endswith(".partial.exr")
+    pid = f"{os.getpid():0{temporaries.PID_DIGITS}d}"
+    assert name.startswith(f".render.{pid}-") and name.endswith(".partial.exr")
     with atomic_path(tmp_path / "render.exr") as tmp:
-        assert tmp.name.startswith(f".render.{os.getpid()}-") and tmp.exists()
+        assert tmp.name.startswith(f".render.{pid}-") and tmp.exists()
         tmp.write_bytes(b"x")
     assert tree(tmp_path) == {"render.exr": b"x"}
 
