@@ -64,11 +64,8 @@ def main(argv=None) -> int:
     import bpy
     from support.random_lights import add_random_lights
     from support.random_scenes import build_random_scene
-    from support.scatter_oracle import cycles_noise
-    from xsl_render.addon.maps.estimator_choice import choose_estimator
-    from xsl_render.addon.scene.geometry import step_setting
+    from support.scatter_oracle import auto_scatter, cycles_noise
     from xsl_render.core.media.scatter_sampling import BOTH
-    from xsl_render.core.sampling.render_options import RenderOptions
 
     print("scene: Cycles distance / equiangular over both (fog light alone) | the model's")
     for name in scenes + seeds:
@@ -81,9 +78,8 @@ def main(argv=None) -> int:
             scene, label = bpy.context.scene, name
             scene.render.resolution_x, scene.render.resolution_y = EXAMPLE_SIZE
             scene.render.resolution_percentage = 100
-        choice = choose_estimator(scene, RenderOptions(max_spp=16, estimator="auto").check(), 16)
-        predicted = choice.scatter_noise or {}
-        keys = [key for key in predicted if step_setting(key)[0].volume_sampling != "DISTANCE"]
+        choice, own = auto_scatter(scene)
+        predicted, keys = choice.scatter_noise or {}, list(own)
         if not keys:
             print(f"{label}: no medium could switch", flush=True)
             continue

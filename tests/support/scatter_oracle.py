@@ -52,17 +52,25 @@ class SceneVerdict:
         return f"predicted {singles}; {auto}; Cycles all at distance {self.distance_ratio:.2f}"
 
 
-def scene_verdict(blender, scene, spp: int = 16) -> SceneVerdict | None:
-    """Auto's choice on ``scene`` judged by Cycles (None where no carrier could switch)."""
+def auto_scatter(scene, spp: int = 16):
+    """(auto's estimator choice on ``scene``, {carrier: its own method} of the carriers that
+    could switch to distance, those not at distance already)."""
     from xsl_render.addon.maps.estimator_choice import choose_estimator
     from xsl_render.addon.scene.geometry import step_setting
     from xsl_render.core.media.scatter_sampling import DISTANCE
     from xsl_render.core.sampling.render_options import RenderOptions
 
     choice = choose_estimator(scene, RenderOptions(max_spp=spp, estimator="auto").check(), spp)
+    own = {key: step_setting(key)[0].volume_sampling for key in choice.scatter_noise or {}}
+    return choice, {key: method for key, method in own.items() if method != DISTANCE}
+
+
+def scene_verdict(blender, scene, spp: int = 16) -> SceneVerdict | None:
+    """Auto's choice on ``scene`` judged by Cycles (None where no carrier could switch)."""
+    from xsl_render.core.media.scatter_sampling import DISTANCE
+
+    choice, own = auto_scatter(scene, spp)
     predicted = choice.scatter_noise or {}
-    own = {key: step_setting(key)[0].volume_sampling for key in predicted}
-    own = {key: method for key, method in own.items() if method != DISTANCE}
     if not own:
         return None
     base = max(cycles_noise(blender, scene, {}), 1e-12)
