@@ -108,7 +108,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
         return done(replace(kept_scene_settings(f"{unmodelled}, so the light through the media cannot be "
                                                 "modelled"), **scatter))
     predictor = light_path_predictor(scene, depsgraph, rays, geometry, media, segments, pixels,
-                                     emitters, finest=min(CANDIDATE_RATES))
+                                     emitters, rates=CANDIDATE_RATES)
 
     def measure(rate) -> float:
         return 0.0 if predictor is None else predictor.error(rate).visible()

@@ -149,7 +149,7 @@ def display_white(scene) -> float:
 
 
 def light_path_predictor(scene, depsgraph, rays: CameraRays, geometry, media, segments,
-                         pixels: np.ndarray, emitters: Emitters, finest: float):
+                         pixels: np.ndarray, emitters: Emitters, rates):
     """The light-path prediction on the sampled ``pixels`` whose picture ray marching can
     change: those crossing a medium marched in steps, or whose first surface's shadow rays
     do; up to ``LIGHT_RAYS`` of them, each standing for its share of the frame. None when
@@ -196,7 +196,7 @@ def light_path_predictor(scene, depsgraph, rays: CameraRays, geometry, media, se
         kept_segments.append((rows[keep], np.asarray(t0)[keep], np.asarray(t1)[keep]))
     return LightPathPredictor(origins[kept], directions[kept], near[kept], far[kept], normals[kept],
                               np.full(len(kept), len(chosen) / len(kept)), media, kept_segments,
-                              emitters, cast, finest=finest, max_steps=int(scene.cycles.volume_max_steps),
+                              emitters, cast, rates=rates, max_steps=int(scene.cycles.volume_max_steps),
                               clip=display_white(scene), rest=float(len(pixels) - len(chosen)))
 
 

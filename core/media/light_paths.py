@@ -21,10 +21,8 @@ import numpy as np
 from .scene_model import luminance
 
 #: Points along each camera ray where shadow rays start (``_scatter_points``): its entry
-#: into the media, quantiles of where a distance sample scatters (its density sigma_t T),
-#: and points spread evenly over the pieces marched in steps.
-QUANTILE_POINTS, EVEN_POINTS = 4, 5
-SCATTER_POINTS = 1 + QUANTILE_POINTS + EVEN_POINTS
+#: into the media and quantiles of where distance samples scatter, exactly and marched.
+SCATTER_POINTS = 12
 #: Points a step's scattering is spread over (quantiles of its exponential).
 STEP_QUANTILES = 6
 #: Offset pairs (u, v) a camera ray is marched with, and shade offsets of a shadow ray.
@@ -46,6 +44,8 @@ WORLD_DIRECTIONS = np.array([[x, y, z] for z in (1, -1) for y in (1, -1) for x i
 #: Length of a shadow ray toward a distant light (a sun, the sky), in scene units.
 DISTANT = 1e6
 _ISOTROPIC = 1.0 / (4.0 * math.pi)
+#: Light below this is none (its logarithm is interpolated).
+_DARKEST = 1e-30
 
 
 @dataclass
@@ -288,8 +288,9 @@ class LightPathPredictor:
     cast : callable
         ``cast(origins, directions, lengths) -> (visible, segments)``: whether a surface
         blocks each ray before its length, and each medium's pieces of the rays.
-    finest : float
-        The finest step rate that will be asked for (sets the grid).
+    rates : sequence of float
+        The step rates that will be asked for: the grid follows the finest, and the light
+        is known where each scatters (``_scatter_points``).
     max_steps : int
         Cycles' ``volume_max_steps``.
     clip : float
@@ -299,7 +300,7 @@ class LightPathPredictor:
     """
 
     def __init__(self, origins, directions, near, far, normals, weight, media, segments,
-                 emitters: Emitters, cast, finest: float = 0.25, max_steps: int = 1024,
+                 emitters: Emitters, cast, rates=(4.0, 2.0, 1.0, 0.5, 0.25), max_steps: int = 1024,
                  clip: float = math.inf, rest: float = 0.0):
         self.media, self.emitters, self.max_steps, self.clip = media, emitters, max_steps, clip
         self.rest = rest
@@ -311,11 +312,11 @@ class LightPathPredictor:
         self.steps = [float(m.extra.get("cycles_step", math.inf))
                       if m.constant_extinction() is None else math.inf for m in media]
         self.camera = Pieces.split(self.near, self.far, segments)
+        finest = min(rates)
         self.grid = _Grid(self.camera, self.origins, self.directions, media, self.steps,
                           finest / CELLS_PER_STEP, MAX_CAMERA_CELLS, 3)
-        self._exact_camera()
         # Shadow rays: from each ray's scatter points, and from its surface.
-        points = self._scatter_points()                       # (n, K, 3)
+        points = self._scatter_points(rates)                  # (n, K, 3)
         normal = np.asarray(normals, np.float64)
         normal = normal * np.where(np.einsum("ij,ij->i", normal, self.directions) > 0, -1.0, 1.0)[:, None]
         # Shadow rays leave a surface from just above it (toward the camera's side).
@@ -332,53 +333,36 @@ class LightPathPredictor:
         self._cache: dict = {}
         self.truth = self._pixels(self.shadow.exact, None)
 
-    # --- the camera rays, exactly ----------------------------------------------------------
-    def _exact_camera(self) -> None:
-        """Optical depth along each ray at every grid cell (cumulative, per channel)."""
-        grid, n = self.grid, len(self.near)
-        sigma = grid.values[0]
-        width = grid.width[grid.cell_piece][:, None]
-        ray = self.camera.ray[grid.cell_piece]
-        depth = sigma * width
-        # Cells are ordered by ray and along it: the depth before each cell within its ray.
-        cumulative = np.cumsum(depth, axis=0)
-        first = np.searchsorted(ray, ray)
-        earlier = np.where((first > 0)[:, None], cumulative[np.maximum(first - 1, 0)], 0.0)
-        self._depth_before = cumulative - depth - earlier
-        self._total_depth = np.zeros((n, 3))
-        np.add.at(self._total_depth, ray, depth)
-
-    def _scatter_points(self) -> np.ndarray:
-        """(n, K, 3): where each camera ray may gather light, sorted along it: where it enters
-        its first medium, the quantiles of where a distance sample scatters (of 1 - T over
-        the ray), and points spread evenly over its pieces marched in steps. A coarse step
-        scatters both before the first dense part of a medium (in light not yet shadowed)
-        and far behind it (where a step's shading point missed it), so the light must be
-        known all along, not only where the exact estimate gathers it."""
-        grid, n = self.grid, len(self.near)
-        ray = self.camera.ray[grid.cell_piece]
-        gathered = 1.0 - np.exp(-luminance(self._depth_before.T + (grid.values[0] * grid.width[grid.cell_piece][:, None]).T))
-        total = 1.0 - np.exp(-luminance(self._total_depth.T))
+    def _scatter_points(self, rates) -> np.ndarray:
+        """(n, K, 3): where each camera ray's distance samples scatter, sorted along it: its
+        entry into the media, then the quantiles of where they scatter exactly and as
+        marched at each of ``rates``, mixed evenly. The light is known there and
+        interpolated between (``_interpolate_light``): a coarse step scatters both before
+        the first dense part of a medium (in light not yet shadowed) and far behind it
+        (where its shading points missed it), which the exact estimate never does."""
+        n = len(self.near)
         t = np.repeat(self.near[:, None], SCATTER_POINTS, axis=1)
-        quantile = (np.arange(QUANTILE_POINTS) + 0.5) / QUANTILE_POINTS
-        even = (np.arange(EVEN_POINTS) + 0.5) / EVEN_POINTS
-        stepped = np.array([any(math.isfinite(self.steps[m]) for m in active) for active in self.camera.active], bool)
-        for r in range(n):
-            pieces = np.flatnonzero(self.camera.ray == r)
-            if not len(pieces):
-                continue
-            t[r, 0] = self.camera.a[pieces[0]]
-            cells = np.flatnonzero(ray == r)
-            if total[r] > 0.0:
-                share = gathered[cells] / total[r]
-                index = np.minimum(np.searchsorted(share, quantile), len(cells) - 1)
-                t[r, 1:1 + QUANTILE_POINTS] = grid.cell_t[cells[index]]
-            marched = pieces[stepped[pieces]]
-            if len(marched):
-                lo, hi = self.camera.a[marched[0]], self.camera.b[marched[-1]]
-                t[r, 1 + QUANTILE_POINTS:] = lo + even * (hi - lo)
-            else:
-                t[r, 1 + QUANTILE_POINTS:] = t[r, QUANTILE_POINTS]
+        entry = np.searchsorted(self.camera.ray, np.arange(n))
+        has = entry < len(self.camera)
+        t[has] = self.camera.a[entry[has], None]
+        rays, where, masses = [], [], []
+        for source in (None, *rates):
+            ray, at, mass = self._scatter_mass(None if source is None else (float(source),) * len(self.media))
+            total = np.bincount(ray, mass, n)
+            keep = mass > 0
+            rays.append(ray[keep]), where.append(at[keep]), masses.append(mass[keep] / total[ray[keep]])
+        ray, at, mass = (np.concatenate(x) for x in (rays, where, masses))
+        order = np.lexsort((at, ray))
+        ray, at, mass = ray[order], at[order], mass[order]
+        cumulative = np.cumsum(mass)
+        first = np.searchsorted(ray, np.arange(n))
+        last = np.searchsorted(ray, np.arange(n), side="right")
+        quantile = (np.arange(SCATTER_POINTS - 1) + 0.5) / (SCATTER_POINTS - 1)
+        for r in np.flatnonzero(last > first):
+            base = cumulative[first[r] - 1] if first[r] > 0 else 0.0
+            share = (cumulative[first[r]:last[r]] - base) / max(cumulative[last[r] - 1] - base, 1e-300)
+            index = np.minimum(np.searchsorted(share, quantile), last[r] - first[r] - 1)
+            t[r, 1:] = at[first[r] + index]
         t = np.sort(t, axis=1)
         self._quantile_t = t
         return self.origins[:, None, :] + self.directions[:, None, :] * t[..., None]
@@ -419,76 +403,41 @@ class LightPathPredictor:
         """(gathered (n, 3), transmittance to the end (n, 3)) along the camera rays: exactly
         (``rates`` None: every grid cell a step) or Cycles' marching at ``rates`` averaged
         over ``CAMERA_RUNS`` offset pairs."""
-        n, grid, pieces = len(self.near), self.grid, self.camera
-        if rates is None:
-            u = v = np.array([0.5])
-            runs = 1
-        else:
-            index = np.arange(CAMERA_RUNS)
-            u, v = (index + 0.5) / CAMERA_RUNS, np.mod(0.5 + index * _GOLDEN, 1.0)
-            runs = CAMERA_RUNS
-        gathered = np.zeros((n, runs, 3))
-        depth = np.zeros((n, runs, 3))
-        # Pieces in order along each ray: the rank of each within its ray.
-        first = np.searchsorted(pieces.ray, pieces.ray)
-        rank = np.arange(len(pieces)) - first
-        for r in range(int(rank.max()) + 1 if len(pieces) else 0):
-            at_rank = np.flatnonzero(rank == r)
-            if rates is None:
-                batches = [(at_rank, None)]
-            else:
-                sub = Pieces(pieces.ray[at_rank], pieces.a[at_rank], pieces.b[at_rank],
-                             [pieces.active[i] for i in at_rank])
-                batches = [(at_rank[chosen], step) for chosen, step in
-                           _batches(sub, self.steps, rates, self.max_steps)]
-            for chosen, step in batches:
-                self._march_pieces(chosen, step, u, v, light, gathered, depth, emission)
-        ends = np.exp(-depth)
-        return gathered.mean(axis=1), ends.mean(axis=1)
+        walk = _CameraWalk(self, rates)
+        gathered = np.zeros((len(self.near), walk.runs, 3))
+        for step in walk:
+            light_there = self._interpolate_light(step.ray, step.scatter_at, light).mean(axis=-2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                albedo = np.where(step.sigma > 0.0, step.scatter / step.sigma, 0.0)
+                emitted = 0.0
+                if emission:
+                    emit = self.grid.at(2, step.piece, step.shade)
+                    emitted = np.where(step.sigma > 0.0, emit * step.kept / step.sigma, emit * step.dt[..., None])
+            contribution = step.carried * (albedo * step.kept * light_there + emitted)
+            np.add.at(gathered, step.ray, contribution.sum(axis=2))
+        return gathered.mean(axis=1), np.exp(-walk.depth).mean(axis=1)
 
-    def _march_pieces(self, chosen, step, u, v, light, gathered, depth, emission) -> None:
-        grid, pieces = self.grid, self.camera
-        ray = pieces.ray[chosen]
-        a, b = pieces.a[chosen], pieces.b[chosen]
-        if step is None or not np.all(np.isfinite(step)):
-            # Every cell a step (the truth), or homogeneous media (one exact step: its cell).
-            cells = np.arange(int(grid.count[chosen].max()))
-            width = grid.width[chosen]
-            valid = cells[None, :] < grid.count[chosen][:, None]
-            starts = a[:, None] + cells[None, :] * width[:, None]
-            dt = np.where(valid, width[:, None], 0.0)
-            starts = np.repeat(starts[:, None, :], len(u), axis=1)
-            dt = np.repeat(dt[:, None, :], len(u), axis=1)
-            shade = starts + 0.5 * dt
-        else:
-            starts, dt, shade = _steps(a, b, step, u, v, self.max_steps)
-        piece = np.broadcast_to(chosen[:, None, None], shade.shape)
-        sigma = grid.at(0, piece, shade)
-        scatter = grid.at(1, piece, shade)
-        emit = grid.at(2, piece, shade) if emission else 0.0
-        depth_step = sigma * dt[..., None]
-        before = depth[ray][:, :, None, :] + np.cumsum(depth_step, axis=2) - depth_step
-        carried = np.exp(-before)
-        kept = -np.expm1(-depth_step)                                     # 1 - exp(-sigma dt)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            albedo = np.where(sigma > 0.0, scatter / sigma, 0.0)
-            emitted = np.where(sigma > 0.0, emit * kept / sigma, emit * dt[..., None]) if emission else 0.0
-            # The light where a distance sample scatters inside the step: its mean over the
-            # exponential's quantiles (luminance); the light falls steeply into a dense medium.
-            s = luminance(np.moveaxis(sigma, -1, 0))
-            share = -np.expm1(-s * dt)[..., None] * ((np.arange(STEP_QUANTILES) + 0.5) / STEP_QUANTILES)
-            offset = np.where(s[..., None] * dt[..., None] > 1e-6, -np.log1p(-share) / np.where(s > 0, s, 1.0)[..., None],
-                              dt[..., None] * (np.arange(STEP_QUANTILES) + 0.5) / STEP_QUANTILES)
-        light_there = self._interpolate_light(ray, starts[..., None] + offset, light).mean(axis=-2)
-        contribution = carried * (albedo * kept * light_there + emitted)
-        np.add.at(gathered, ray, contribution.sum(axis=2))
-        np.add.at(depth, ray, depth_step.sum(axis=2))
+    def _scatter_mass(self, rates):
+        """(ray, t, mass) of where distance samples scatter along the camera rays, exactly
+        (``rates`` None) or as marched at ``rates`` (the runs' mean): luminance."""
+        rays, where, masses = [], [], []
+        walk = _CameraWalk(self, rates)
+        for step in walk:
+            mass = luminance(np.moveaxis(step.carried * step.kept, -1, 0))[..., None] / (STEP_QUANTILES * walk.runs)
+            mass = np.broadcast_to(mass, step.scatter_at.shape)
+            rays.append(np.broadcast_to(step.ray[:, None, None, None], mass.shape).ravel())
+            where.append(step.scatter_at.ravel())
+            masses.append(mass.ravel())
+        if not rays:
+            return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
+        return np.concatenate(rays), np.concatenate(where), np.concatenate(masses)
 
     def _interpolate_light(self, ray, t, light) -> np.ndarray:
-        """(pieces, runs, count, 3): the light arriving along ``ray`` at distances ``t``,
-        linear between the ray's scatter points (constant beyond them)."""
+        """(pieces, runs, count, ..., 3): the light arriving along ``ray`` at distances ``t``,
+        between the ray's scatter points linear in its logarithm (light into a medium falls
+        off exponentially), constant beyond them."""
         knots = self._quantile_t[ray]                                     # (p, K)
-        values = light[ray]                                               # (p, K, 3)
+        values = np.log(np.maximum(light[ray], _DARKEST))                 # (p, K, 3)
         flat = t.reshape(len(ray), -1)
         position = np.clip(np.sum(flat[:, :, None] >= knots[:, None, :], axis=2) - 1, 0, SCATTER_POINTS - 1)
         upper = np.minimum(position + 1, SCATTER_POINTS - 1)
@@ -496,8 +445,8 @@ class LightPathPredictor:
         t0, t1 = knots[rows, position], knots[rows, upper]
         with np.errstate(divide="ignore", invalid="ignore"):
             f = np.where(t1 > t0, np.clip((flat - t0) / (t1 - t0), 0.0, 1.0), 0.0)
-        out = values[rows, position] * (1.0 - f[..., None]) + values[rows, upper] * f[..., None]
-        return out.reshape(t.shape + (3,))
+        out = np.exp(values[rows, position] * (1.0 - f[..., None]) + values[rows, upper] * f[..., None])
+        return np.where(out <= _DARKEST * 1.0001, 0.0, out).reshape(t.shape + (3,))
 
     # --- the error ------------------------------------------------------------------------
     def error(self, rates) -> ImageError:
@@ -528,6 +477,84 @@ class LightPathPredictor:
                     report = (value, error)
         value, error = report if report is not None else (np.zeros(len(self.near)),) * 2
         return ImageError(value=value, error=error, relative=worst, weight=self.weight, rest=self.rest)
+
+
+@dataclass
+class _Step:
+    """One batch of camera pieces' steps: each (pieces, runs, count) array, the media's
+    coefficients at the shading points (..., 3), and ``scatter_at`` (..., STEP_QUANTILES)
+    where a distance sample scatters inside each step (its exponential's quantiles)."""
+
+    ray: np.ndarray
+    piece: np.ndarray
+    shade: np.ndarray
+    dt: np.ndarray
+    sigma: np.ndarray
+    scatter: np.ndarray
+    carried: np.ndarray
+    kept: np.ndarray
+    scatter_at: np.ndarray
+
+
+class _CameraWalk:
+    """Steps through the camera rays' pieces in order along each ray, exactly (every grid
+    cell a step) or as Cycles marches them at ``rates`` over ``CAMERA_RUNS`` offset pairs,
+    carrying each ray's optical depth so far (``depth`` (n, runs, 3) at the end)."""
+
+    def __init__(self, predictor: "LightPathPredictor", rates):
+        self.predictor, self.rates = predictor, rates
+        if rates is None:
+            self.u = self.v = np.array([0.5])
+        else:
+            index = np.arange(CAMERA_RUNS)
+            self.u, self.v = (index + 0.5) / CAMERA_RUNS, np.mod(0.5 + index * _GOLDEN, 1.0)
+        self.runs = len(self.u)
+        self.depth = np.zeros((len(predictor.near), self.runs, 3))
+
+    def __iter__(self):
+        p = self.predictor
+        pieces = p.camera
+        # Pieces in order along each ray: the rank of each within its ray.
+        rank = np.arange(len(pieces)) - np.searchsorted(pieces.ray, pieces.ray)
+        for r in range(int(rank.max()) + 1 if len(pieces) else 0):
+            at_rank = np.flatnonzero(rank == r)
+            if self.rates is None:
+                batches = [(at_rank, None)]
+            else:
+                sub = Pieces(pieces.ray[at_rank], pieces.a[at_rank], pieces.b[at_rank],
+                             [pieces.active[i] for i in at_rank])
+                batches = [(at_rank[chosen], step) for chosen, step in _batches(sub, p.steps, self.rates, p.max_steps)]
+            for chosen, step in batches:
+                yield self._step(chosen, step)
+
+    def _step(self, chosen, step) -> _Step:
+        grid, pieces = self.predictor.grid, self.predictor.camera
+        ray = pieces.ray[chosen]
+        a, b = pieces.a[chosen], pieces.b[chosen]
+        if step is None or not np.all(np.isfinite(step)):
+            # Every cell a step (the truth), or homogeneous media (one exact step: its cell).
+            cells = np.arange(int(grid.count[chosen].max()))
+            width = grid.width[chosen]
+            valid = cells[None, :] < grid.count[chosen][:, None]
+            starts = np.repeat((a[:, None] + cells[None, :] * width[:, None])[:, None, :], self.runs, axis=1)
+            dt = np.repeat(np.where(valid, width[:, None], 0.0)[:, None, :], self.runs, axis=1)
+            shade = starts + 0.5 * dt
+        else:
+            starts, dt, shade = _steps(a, b, step, self.u, self.v, self.predictor.max_steps)
+        piece = np.broadcast_to(chosen[:, None, None], shade.shape)
+        sigma = grid.at(0, piece, shade)
+        depth_step = sigma * dt[..., None]
+        before = self.depth[ray][:, :, None, :] + np.cumsum(depth_step, axis=2) - depth_step
+        s = luminance(np.moveaxis(sigma, -1, 0))
+        quantile = (np.arange(STEP_QUANTILES) + 0.5) / STEP_QUANTILES
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = -np.expm1(-s * dt)[..., None] * quantile
+            offset = np.where(s[..., None] * dt[..., None] > 1e-6,
+                              -np.log1p(-share) / np.where(s > 0, s, 1.0)[..., None], dt[..., None] * quantile)
+        out = _Step(ray=ray, piece=piece, shade=shade, dt=dt, sigma=sigma, scatter=grid.at(1, piece, shade),
+                    carried=np.exp(-before), kept=-np.expm1(-depth_step), scatter_at=starts[..., None] + offset)
+        np.add.at(self.depth, ray, depth_step.sum(axis=2))
+        return out
 
 
 class _ShadowRays:
