@@ -41,6 +41,9 @@ DARK_SHARE = 0.05
 #: Directions a world light is sampled in (cube corners: four up, four down).
 WORLD_DIRECTIONS = np.array([[x, y, z] for z in (1, -1) for y in (1, -1) for x in (1, -1)],
                             np.float64) / math.sqrt(3.0)
+#: A light of known strength bringing less than this share of the known lights' light to the
+#: scatter points and surfaces is left out (``Emitters.strongest``).
+FAINT_LIGHT = 0.02
 #: Length of a shadow ray toward a distant light (a sun, the sky), in scene units.
 DISTANT = 1e6
 _ISOTROPIC = 1.0 / (4.0 * math.pi)
@@ -77,6 +80,22 @@ class Emitters:
     @property
     def count(self) -> int:
         return len(self.positions) + len(self.toward)
+
+    def strongest(self, points: np.ndarray) -> "Emitters":
+        """These lights less those of known strength that bring under ``FAINT_LIGHT`` of the
+        known lights' light to ``points`` (before shadows): leaving a light out lowers a
+        pixel's value, not its error, so the relative error left is the larger."""
+        _, _, irradiance = self.shadow_rays(points)
+        brought = luminance(irradiance.sum(axis=1).T)                      # (lights,)
+        known = self.group == 0
+        keep = ~known | (brought >= FAINT_LIGHT * brought[known].sum())
+        if keep.all():
+            return self
+        local, far = keep[:len(self.positions)], keep[len(self.positions):]
+        return Emitters(positions=self.positions[local], intensity=self.intensity[local], axes=self.axes[local],
+                        cone_cos=self.cone_cos[local], cone_smooth=self.cone_smooth[local],
+                        one_sided=self.one_sided[local], toward=self.toward[far], irradiance=self.irradiance[far],
+                        group=self.group[keep], background=self.background)
 
     def shadow_rays(self, points: np.ndarray):
         """For every light and point: (direction (L + D, n, 3), length (L + D, n), irradiance
@@ -323,6 +342,7 @@ class LightPathPredictor:
         lift = 1e-4 * np.maximum(1.0, np.abs(self.far))[:, None]
         surface = self.origins + self.directions * self.far[:, None] + normal * lift
         starts = np.concatenate([points.reshape(-1, 3), surface[self.hit]])
+        self.emitters = emitters = emitters.strongest(starts)
         self.shadow = _ShadowRays(starts, emitters, media, self.steps, cast, finest, max_steps)
         k = SCATTER_POINTS
         self._scatter_rows = slice(0, n * k)
@@ -335,34 +355,38 @@ class LightPathPredictor:
 
     def _scatter_points(self, rates) -> np.ndarray:
         """(n, K, 3): where each camera ray's distance samples scatter, sorted along it: its
-        entry into the media, then the quantiles of where they scatter exactly and as
-        marched at each of ``rates``, mixed evenly. The light is known there and
-        interpolated between (``_interpolate_light``): a coarse step scatters both before
-        the first dense part of a medium (in light not yet shadowed) and far behind it
-        (where its shading points missed it), which the exact estimate never does."""
-        n = len(self.near)
+        entry into the media, then the quantiles (at the grid's cells) of where they
+        scatter exactly and as marched at each of ``rates``, mixed evenly. The light is
+        known there and interpolated between (``_interpolate_light``): a coarse step
+        scatters both before the first dense part of a medium (in light not yet shadowed)
+        and far behind it (where its shading points missed it), which the exact estimate
+        never does."""
+        n, grid = len(self.near), self.grid
         t = np.repeat(self.near[:, None], SCATTER_POINTS, axis=1)
         entry = np.searchsorted(self.camera.ray, np.arange(n))
         has = entry < len(self.camera)
         t[has] = self.camera.a[entry[has], None]
-        rays, where, masses = [], [], []
+        ray = self.camera.ray[grid.cell_piece]
+        mixed = np.zeros(len(ray))
         for source in (None, *rates):
-            ray, at, mass = self._scatter_mass(None if source is None else (float(source),) * len(self.media))
+            mass = self._scatter_mass(None if source is None else (float(source),) * len(self.media))
             total = np.bincount(ray, mass, n)
-            keep = mass > 0
-            rays.append(ray[keep]), where.append(at[keep]), masses.append(mass[keep] / total[ray[keep]])
-        ray, at, mass = (np.concatenate(x) for x in (rays, where, masses))
-        order = np.lexsort((at, ray))
-        ray, at, mass = ray[order], at[order], mass[order]
-        cumulative = np.cumsum(mass)
+            mixed += np.where(total[ray] > 0, mass / np.where(total[ray] > 0, total[ray], 1.0), 0.0)
+        # Per ray, the mixture's cumulative share along its cells, offset by the ray's index
+        # so that one sorted search finds every ray's quantiles.
+        cumulative = np.cumsum(mixed)
         first = np.searchsorted(ray, np.arange(n))
         last = np.searchsorted(ray, np.arange(n), side="right")
+        base = np.where(first > 0, cumulative[np.maximum(first - 1, 0)], 0.0)
+        span = np.where(last > first, cumulative[np.maximum(last - 1, 0)] - base, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.where(span[ray] > 0, (cumulative - base[ray]) / span[ray], 1.0)
+        share = np.minimum(share, 1.0) + ray
         quantile = (np.arange(SCATTER_POINTS - 1) + 0.5) / (SCATTER_POINTS - 1)
-        for r in np.flatnonzero(last > first):
-            base = cumulative[first[r] - 1] if first[r] > 0 else 0.0
-            share = (cumulative[first[r]:last[r]] - base) / max(cumulative[last[r] - 1] - base, 1e-300)
-            index = np.minimum(np.searchsorted(share, quantile), last[r] - first[r] - 1)
-            t[r, 1:] = at[first[r] + index]
+        gathers = np.flatnonzero(span > 0)
+        index = np.searchsorted(share, (gathers[:, None] + quantile[None, :]).ravel())
+        index = np.minimum(index.reshape(len(gathers), -1), (last[gathers] - 1)[:, None])
+        t[gathers, 1:] = grid.cell_t[index]
         t = np.sort(t, axis=1)
         self._quantile_t = t
         return self.origins[:, None, :] + self.directions[:, None, :] * t[..., None]
@@ -417,20 +441,19 @@ class LightPathPredictor:
             np.add.at(gathered, step.ray, contribution.sum(axis=2))
         return gathered.mean(axis=1), np.exp(-walk.depth).mean(axis=1)
 
-    def _scatter_mass(self, rates):
-        """(ray, t, mass) of where distance samples scatter along the camera rays, exactly
-        (``rates`` None) or as marched at ``rates`` (the runs' mean): luminance."""
-        rays, where, masses = [], [], []
+    def _scatter_mass(self, rates) -> np.ndarray:
+        """Per grid cell of the camera rays, how much of a distance sample scatters there,
+        exactly (``rates`` None) or as marched at ``rates`` (the runs' mean); luminance."""
+        grid = self.grid
+        mass = np.zeros(len(grid.cell_t))
         walk = _CameraWalk(self, rates)
         for step in walk:
-            mass = luminance(np.moveaxis(step.carried * step.kept, -1, 0))[..., None] / (STEP_QUANTILES * walk.runs)
-            mass = np.broadcast_to(mass, step.scatter_at.shape)
-            rays.append(np.broadcast_to(step.ray[:, None, None, None], mass.shape).ravel())
-            where.append(step.scatter_at.ravel())
-            masses.append(mass.ravel())
-        if not rays:
-            return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
-        return np.concatenate(rays), np.concatenate(where), np.concatenate(masses)
+            share = luminance(np.moveaxis(step.carried * step.kept, -1, 0))[..., None] / (STEP_QUANTILES * walk.runs)
+            piece = np.broadcast_to(step.piece[..., None], step.scatter_at.shape)
+            local = np.floor((step.scatter_at - self.camera.a[piece]) / grid.width[piece])
+            cell = grid.offset[piece] + np.clip(local, 0, grid.count[piece] - 1).astype(np.int64)
+            np.add.at(mass, cell.ravel(), np.broadcast_to(share, cell.shape).ravel())
+        return mass
 
     def _interpolate_light(self, ray, t, light) -> np.ndarray:
         """(pieces, runs, count, ..., 3): the light arriving along ``ray`` at distances ``t``,
