@@ -31,9 +31,11 @@ def test_settings_are_put_back_newest_first_and_the_written_datablocks_named(ble
     assert record.set(material.cycles, "volume_step_rate", 8.0) is True        # the first value is kept
     assert record.set(material.cycles, "volume_sampling", "DISTANCE") is True
     assert record.set(world.cycles, "volume_step_size", world.cycles.volume_step_size) is False
+    assert record.set(world.cycles, "volume_step_size", 0.5) is True
     assert {d.name for d in record.datablocks()} == {"Fog", "Sky"}
     assert [d.name for d in record.datablocks(blender.types.Material)] == ["Fog"]
-    assert [d.name for d in record.restore()] == ["Fog"]
+    assert {d.name for d in record.restore()} == {"Fog", "Sky"}
+    assert world.cycles.volume_step_size == 1.0
     assert (material.cycles.volume_step_rate, material.cycles.volume_sampling) == (1.5, "MULTIPLE_IMPORTANCE")
     assert record.restore() == [] and record.datablocks() == []              # once only
 

@@ -41,6 +41,7 @@ class ChangeRecord:
     def __init__(self):
         # (datablock or struct pointer, path, property) -> (datablock, path, struct, old value)
         self._saved: dict[tuple, tuple] = {}
+        self._written: set[tuple] = set()           # the keys of those that were changed
 
     def set(self, struct, name: str, value) -> bool:
         """Write ``struct.name = value``, noting the old value first; True if it changed."""
@@ -58,12 +59,14 @@ class ChangeRecord:
         if current == plain(value):
             return False
         setattr(struct, name, set(value) if isinstance(value, frozenset) else value)
+        self._written.add(key)
         return True
 
     def datablocks(self, kind: type | None = None) -> list:
-        """The datablocks whose settings were changed through ``set`` (of type ``kind``)."""
+        """The datablocks whose settings ``set`` changed (of type ``kind``), until ``restore``."""
         found = {}
-        for owner, *_ in self._saved.values():
+        for key in self._written:
+            owner = self._saved[key][0]
             if _alive(owner) and (kind is None or isinstance(owner, kind)):
                 found[owner.as_pointer()] = owner
         return list(found.values())
@@ -72,7 +75,7 @@ class ChangeRecord:
         """Put every noted value back (newest first) and forget them; the datablocks written.
         A datablock removed meanwhile is skipped; a value that cannot be set back does not
         stop the others, and is raised once they are back."""
-        entries, self._saved = list(self._saved.items()), {}
+        entries, self._saved, self._written = list(self._saved.items()), {}, set()
         written, failure = {}, None
         for (_, _, name), (owner, path, struct, value) in reversed(entries):
             if owner is not None:
