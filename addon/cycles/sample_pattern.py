@@ -14,11 +14,15 @@ from ...core.sampling.sample_pattern import needs_debug_options
 from ..scene.state import DEBUG_PATTERN_PREFERENCES, let_session_go
 
 
-def apply_sample_pattern(scene, pattern: str) -> None:
-    """Render ``scene`` with Cycles' sample ``pattern`` (inside ``preserved_scene``)."""
+def apply_sample_pattern(scene, pattern: str, changes=None) -> None:
+    """Render ``scene`` with Cycles' sample ``pattern`` (inside ``preserved_scene``; through
+    the change record ``changes`` where given, ``addon.scene.changes``)."""
     if needs_debug_options(pattern):
         _enable_debug_patterns(scene)
-    scene.cycles.sampling_pattern = pattern
+    if changes is not None:
+        changes.set(scene.cycles, "sampling_pattern", pattern)
+    else:
+        scene.cycles.sampling_pattern = pattern
 
 
 def debug_patterns_enabled() -> bool:

@@ -30,9 +30,11 @@ from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
+from ..scene.carriers import kept_reason
+from ..scene.changes import ChangeRecord
 from ..scene.geometry import step_setting
 from ..scene.probe import camera_model, render_size
-from ..scene.state import preserved_scene
+from ..scene.state import preserved_scene, scene_changes
 from .sample_pattern import apply_sample_pattern
 from .tile_render import CyclesWindowRenderer, RenderedWindow
 
@@ -63,8 +65,7 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
         scene.render.resolution_x, scene.render.resolution_y = options.resolution
         scene.render.resolution_percentage = 100
     camera_model(scene)                     # InputError for a missing or non-camera camera
-    apply_estimator(scene, options.volume_estimator())
-    warnings = []
+    warnings = apply_estimator(scene, options.volume_estimator())
     if scene.render.engine != "CYCLES":
         warnings.append(f"scene '{scene.name}' renders with {scene.render.engine}; this run "
                         f"uses Cycles (the scene keeps {scene.render.engine})")
@@ -72,29 +73,38 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     return width, height, warnings
 
 
-def apply_estimator(scene, choice) -> None:
-    """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
-    materials' and the world's own steps too where auto gave some media coarser ones, and
-    the sample pattern, the light tree and (while it ray-marches) the media's volume
-    sampling where auto chose them."""
+def apply_estimator(scene, choice, changes: ChangeRecord | None = None) -> list[str]:
+    """Set Cycles' volume estimator as ``choice`` says, the materials' and the world's own
+    steps too where auto gave some media coarser ones, and the sample pattern, the light
+    tree and (while it ray-marches) the media's volume sampling where auto chose them.
+
+    Every setting goes through ``changes`` (by default the record of the innermost
+    ``preserved_scene`` block, ``scene_changes``), which puts it back; a medium's material
+    or world is found by identity (``addon.scene.carriers``). Returns warnings: a medium
+    whose settings may not be changed (linked from a library) keeps its own."""
+    changes = changes if changes is not None else scene_changes(scene)
     if choice.sample_pattern is not None:
-        apply_sample_pattern(scene, choice.sample_pattern)
-    if choice.light_tree is not None and scene.cycles.use_light_tree != choice.light_tree:
-        scene.cycles.use_light_tree = choice.light_tree
+        apply_sample_pattern(scene, choice.sample_pattern, changes)
+    if choice.light_tree is not None:
+        changes.set(scene.cycles, "use_light_tree", choice.light_tree)
     if choice.biased is None:
-        return
-    scene.cycles.volume_biased = bool(choice.biased)
+        return []
+    changes.set(scene.cycles, "volume_biased", bool(choice.biased))
+    if choice.biased and choice.step_rate is not None:
+        changes.set(scene.cycles, "volume_step_rate", float(choice.step_rate))
     # (A settle from ray marching to null scattering puts the media's own methods back.)
     methods = (choice.scatter_sampling if choice.biased else choice.scatter_own) or {}
-    for key, method in methods.items():
-        settings = step_setting(key)[0]
-        if settings.volume_sampling != method:
-            settings.volume_sampling = method
-    if choice.biased and choice.step_rate is not None:
-        scene.cycles.volume_step_rate = float(choice.step_rate)
-    for key, value in (choice.medium_settings or {}).items():
-        settings, name = step_setting(key)
-        setattr(settings, name, float(value))
+    settings = [(key, "volume_sampling", method) for key, method in methods.items()]
+    settings += [(key, None, float(value)) for key, value in (choice.medium_settings or {}).items()]
+    warnings = []
+    for key, name, value in settings:
+        kept = kept_reason(key)
+        if kept is not None:
+            warnings.append(kept)
+            continue
+        struct, step = step_setting(key)
+        changes.set(struct, name or step, value)
+    return list(dict.fromkeys(warnings))
 
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,

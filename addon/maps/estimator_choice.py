@@ -20,7 +20,7 @@ from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, kept_null_scattering, per_medium_rates,
                                                visible_bias)
-from ..scene.geometry import media_by_carrier, scan_scene, step_setting
+from ..scene.geometry import kept_carriers, media_by_carrier, scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
 from ..scene.probe import camera_model, render_size
 from .scatter_choice import scatter_sampling
@@ -112,8 +112,9 @@ def _volumes(scene, options: RenderOptions, spp: float,
             # Kept for a time-budgeted still's settle, which may need finer rates or the
             # media's steps at another scene rate (``settled_for``).
             choice = replace(choice, remeasure=measure)
-    return replace(choice, scatter_sampling=methods or None, scatter_noise=noises or None,
-                   scatter_own=own or None, seconds=time.perf_counter() - started)
+    kept = "".join(f"; {reason}" for reason in kept_carriers(media).values())
+    return replace(choice, reason=choice.reason + kept, scatter_sampling=methods or None,
+                   scatter_noise=noises or None, scatter_own=own or None, seconds=time.perf_counter() - started)
 
 
 def step_carriers(media) -> dict:
