@@ -30,8 +30,9 @@ import sys
 import traceback
 from contextlib import nullcontext
 
+from ..core import temporaries
 from ..core.checks import separate_files
-from ..core.errors import InputError
+from ..core.errors import Cancelled, InputError
 from ..core.files import output_set
 from .commands.argtypes import declared_files, file_options, register_safe_numbers
 from .commands.setting_flags import in_flags
@@ -124,6 +125,8 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
         try:
             with outputs:
                 code = args.run(args)
+                if temporaries.cancel_requested():
+                    raise Cancelled("cancelled")    # announced while it ran: honoured
                 if code:
                     raise _Failed(code)
         except _Failed as failed:
@@ -132,7 +135,8 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
             print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
             code = 2
         except KeyboardInterrupt:
-            print("xsl-render: cancelled", file=sys.stderr)
+            if not temporaries.cancel_requested():      # else announced (``interrupt.py``)
+                print("xsl-render: cancelled", file=sys.stderr)
             code = 130
         except Exception as error:     # our bug, not the user's: say so in one line
             if os.environ.get("XSL_DEBUG"):
