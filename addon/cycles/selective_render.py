@@ -27,6 +27,7 @@ import numpy as np
 from ...core.errors import InputError, SettingError
 from ...core.progress import Progress, ProgressCallback, Steps, TileProgress, run_steps
 from ...core.sampling.composite import Compositor, crop, render_window
+from ...core.sampling.finite_pixels import non_finite_warning, zero_non_finite
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
@@ -109,8 +110,12 @@ def apply_estimator(scene, choice, changes: ChangeRecord | None = None) -> list[
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
                  samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str],
-                 cycles_sync_s: float | None = None, denoise_guides: dict | None = None) -> RenderStats:
-    """What every mode records (``phases`` is kept, not copied: later phases add to it)."""
+                 cycles_sync_s: float | None = None, denoise_guides: dict | None = None,
+                 non_finite_pixels: int = 0) -> RenderStats:
+    """What every mode records (``phases`` is kept, not copied: later phases add to it;
+    ``warnings`` too, which gets a line where ``non_finite_pixels`` were set to 0)."""
+    if non_finite_pixels:
+        warnings.append(non_finite_warning(non_finite_pixels))
     total = float(samples.sum(dtype=np.float64))
     estimator = options.volume_estimator()
     if estimator.seconds:
@@ -122,7 +127,8 @@ def render_stats(mode: str, scene, options: RenderOptions, width: int, height: i
         mean_spp=total / (width * height), gold_samples=width * height * options.max_spp,
         renders=len(tiles), tiles=tiles, options=options.to_dict(),
         estimator=estimator.to_dict() | {"described": estimator.describe()}, warnings=warnings,
-        cycles_sync_s=cycles_sync_s, denoise_guides=denoise_guides)
+        cycles_sync_s=cycles_sync_s, denoise_guides=denoise_guides,
+        non_finite_pixels=non_finite_pixels or None)
 
 
 def tile_entry(window, rendered) -> dict:
@@ -160,13 +166,16 @@ def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptio
 
 
 def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
-                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None]:
-    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase;
-    and, where auto may prefilter the denoising guides, what it decided (their noise, whether
-    that is noisy, whether they were prefiltered: ``RenderStats.denoise_guides``), else None.
-    ``allow_prefilter`` False: the caller could not afford the prefilter (``guided``)."""
+                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None, int]:
+    """The frame as delivered: its infinite or NaN pixels set to 0 (``core.sampling.
+    finite_pixels``: InputError when all are), denoised once, whole (``options.denoise``),
+    timed as a phase; where auto may prefilter the denoising guides, what it decided (their
+    noise, whether that is noisy, whether they were prefiltered: ``RenderStats.
+    denoise_guides``), else None; and the number of pixels set to 0. ``allow_prefilter``
+    False: the caller could not afford the prefilter (``guided``)."""
+    image, non_finite = zero_non_finite(image)
     if not options.denoise:
-        return image, None
+        return image, None, non_finite
     from ...core.sampling.denoise_guides import NOISY_GUIDE_MEDIAN, guide_noise
     from .denoise import denoise
 
@@ -182,7 +191,7 @@ def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOp
                   None if guides is None else guides[..., 3:6],
                   prefilter_guides=bool(record and record["prefiltered"]))
     phases["denoise"] = time.perf_counter() - started
-    return out, record
+    return out, record, non_finite
 
 
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
@@ -244,10 +253,10 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
-        image, denoise_guides = finish_image(image, None if guides is None else guides.result()[0], options,
-                                             phases)
+        image, denoise_guides, non_finite = finish_image(
+            image, None if guides is None else guides.result()[0], options, phases)
         stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings,
-                             renderer.sync_seconds, denoise_guides)
+                             renderer.sync_seconds, denoise_guides, non_finite)
     stats.plan, stats.ideal_speedup = plan.to_dict(), plan.ideal_speedup
     stats.director_map_mean = float(data.mean())
     return RenderOutcome(image, samples, stats, warnings)
@@ -287,11 +296,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
-        image, denoise_guides = finish_image(rendered.pixels, rendered.guides, options, phases)
+        image, denoise_guides, non_finite = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings,
-                             renderer.sync_seconds, denoise_guides)
+                             renderer.sync_seconds, denoise_guides, non_finite)
     stats.budget, stats.noise_threshold = budget, adaptive_threshold
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not
