@@ -35,8 +35,9 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ...core.errors import InputError
-from ...core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
-                               scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
+from ...core.farm.files import (FrameFiles, guided_inputs, known_scene_inputs, load_plan, maps_inputs,
+                               renderer_version, scene_sha256, valid_plan, valid_tile, write_plan_record,
+                               write_scene_inputs, write_tile)
 from ...core.farm.frame_outputs import FrameSummary, guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ...core.farm.task_groups import plan_group
 from ...core.files import atomic_path, json_digest
@@ -78,6 +79,28 @@ def _open(scene_path, scene_name: str, frame: int, device: str | None):
     return scene
 
 
+def scene_digest(scene_path, output) -> str:
+    """The digest of what the job's scene is made from: the .blend and the identity of every
+    file it reads (``addon.scene.scene_inputs``), so that work made from other files is
+    redone. Known without Blender while the job's record of them holds
+    (``core.farm.files.known_scene_inputs``); else the scene is opened and they are listed
+    again, and a file it reads that does not exist fails the task (InputError): Blender would
+    render on without it (a fog-less frame, where a library is missing)."""
+    blend = scene_sha256(scene_path)
+    inputs = known_scene_inputs(output, blend)
+    if inputs is None:
+        from ..scene.blend_session import open_blend
+        from ..scene.scene_inputs import blend_inputs
+
+        open_blend(scene_path)
+        inputs, missing = blend_inputs(scene_path)
+        if missing:
+            more = f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""
+            raise InputError(f"the scene reads {missing[0]}, which does not exist{more}")
+        write_scene_inputs(output, inputs)
+    return json_digest(inputs)
+
+
 def _part(progress: ProgressCallback | None, start: float, end: float, prefix: str) -> ProgressCallback:
     """``progress`` for one frame of a chunk: its fractions mapped onto [start, end]."""
     def report(fraction: float, message: str):
@@ -113,7 +136,7 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
     from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     outcomes, todo = {}, []
     for frame in frames:
         started = time.perf_counter()
@@ -159,7 +182,7 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
 
     log = log or (lambda line: None)
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     work = []
     for frame in frames:
         started = time.perf_counter()
@@ -267,7 +290,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     uses_maps = guided.importance != "none"
     outcomes, inputs = {}, {}
     for frame in frames:
