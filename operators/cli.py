@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import traceback
 from contextlib import nullcontext
@@ -42,11 +43,16 @@ from .signals import EXIT_CODES
 
 class OneLineParser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit code 2, and whose plain
-    ``type=int`` / ``type=float`` refuse what Blender cannot hold (NaN, inf, past 32 bits)."""
+    ``type=int`` / ``type=float`` refuse what Blender cannot hold (NaN, inf, past 32 bits).
+
+    A value that starts with a minus and a digit is a value, never an option: argparse takes
+    only plain negative numbers as values, so ``--frames -3--1`` (frames -3 to -1) had ended
+    in "expected one argument"."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         register_safe_numbers(self)
+        self._negative_number_matcher = re.compile(r"^-\d|^-\.\d")
 
     def error(self, message: str):  # noqa: D401 - argparse API
         command = self.prog.removeprefix("xsl-render").strip()
