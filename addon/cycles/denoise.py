@@ -94,8 +94,8 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
     prefilter; auto's choice, see ``PREFILTER_COST``).
     """
     rgba = zero_non_finite(rgba)[0]
-    albedo = None if albedo is None else zero_non_finite(albedo)[0]
-    normal = None if normal is None else zero_non_finite(normal)[0]
+    albedo = None if albedo is None else zero_non_finite(albedo, whole_frame=False)[0]
+    normal = None if normal is None else zero_non_finite(normal, whole_frame=False)[0]
     alpha = rgba[..., 3:]
     scale = _scale_into_range(rgba)
     if scale != 1.0:

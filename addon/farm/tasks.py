@@ -45,6 +45,7 @@ from ...core.maps.camera_rays import CACHE_NAME
 from ...core.maps.files import write_map_set
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback
+from ...core.sampling.finite_pixels import zero_non_finite
 from ...core.sampling.guided_plan import GuidedOptions
 from ...core.sampling.render_files import frame_attributes, preview_scale
 from ...core.sampling.render_options import RenderOptions
@@ -239,8 +240,11 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
                 renderer, made_for = _window_renderer(renderer, made_for, scene, options)
                 for rect in todo:
                     piece = render_rect(renderer, rect, options)
-                    write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
-                        "group": group, "groups": groups, "spp": rect.spp,
+                    # (As a frame's are, before its composite denoises: core.sampling.finite_pixels.)
+                    pixels, non_finite = zero_non_finite(piece.pixels, whole_frame=False)
+                    guides = None if piece.guides is None else zero_non_finite(piece.guides, whole_frame=False)[0]
+                    write_tile(files, record, rect, pixels, piece.samples, guides=guides, details={
+                        "group": group, "groups": groups, "spp": rect.spp, "non_finite_pixels": non_finite,
                         "samples_rendered": piece.rendered.samples_rendered,
                         "seconds": piece.rendered.seconds,
                         "cycles_sync_s": piece.rendered.sync_seconds, "render_id": uuid.uuid4().hex,

@@ -15,15 +15,15 @@ import numpy as np
 from ..errors import InputError
 
 
-def zero_non_finite(image: np.ndarray) -> tuple[np.ndarray, int]:
+def zero_non_finite(image: np.ndarray, whole_frame: bool = True) -> tuple[np.ndarray, int]:
     """``image`` (H, W, C) with every infinite or NaN value set to 0, and the number of
     pixels that had one (``image`` itself when there were none). InputError when every
-    pixel had one."""
+    pixel had one and ``image`` is a whole frame (not one rectangle of it)."""
     bad = ~np.isfinite(image)
     if not bad.any():
         return image, 0
     pixels = int(bad.any(axis=-1).sum())
-    if pixels == image.shape[0] * image.shape[1]:
+    if whole_frame and pixels == image.shape[0] * image.shape[1]:
         raise InputError("every pixel Cycles rendered is infinite or NaN (light too strong for 32-bit "
                          "floats: an emission or lamp strength near 1e38?)")
     return np.where(bad, np.float32(0.0), image).astype(image.dtype, copy=False), pixels
