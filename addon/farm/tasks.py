@@ -11,7 +11,8 @@ the frames (or rectangles) it had not finished.
 
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
 ``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
-task with nothing left to do returns at once. The pixels come from
+task with nothing left to do returns at once; only where the job's record of the files its
+scene reads no longer holds is the scene opened first, to list them (``scene_digest``). The pixels come from
 ``selective_render.render_rect`` and the dispatcher (``render_dispatch``), the same code
 ``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
