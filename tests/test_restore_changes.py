@@ -157,3 +157,32 @@ def test_a_linked_medium_keeps_its_settings_and_a_same_named_local_one_is_left_a
     capfd.readouterr()
     # The same file renders the same with or without an unused local material of that name.
     np.testing.assert_array_equal(images[True], images[False])
+
+
+def test_a_record_used_outside_every_block_puts_back_all_that_auto_set(blender, addon, tmp_path):
+    """What a render handler does (apply at render start, restore at its end, in two calls):
+    auto's whole choice through an explicit record, no ``preserved_scene`` open; the debug
+    preferences its sample pattern needs and the persistent data it lets go come back too."""
+    from xsl_render.addon.cycles.selective_render import apply_estimator
+    from xsl_render.addon.maps.estimator_choice import choose_estimator
+    from xsl_render.addon.scene.changes import ChangeRecord
+    from xsl_render.addon.scene.state import settings_dump
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    scene = instanced_fog(blender, tmp_path)
+    scene.render.use_persistent_data = True
+    preferences = blender.context.preferences
+    preferences.view.show_developer_ui = preferences.experimental.use_cycles_debug = False
+    debug = (preferences.view.show_developer_ui, preferences.experimental.use_cycles_debug,
+             preferences.is_dirty)
+    before, media = settings_dump(scene), volume_settings(blender)
+    choice = choose_estimator(scene, RenderOptions(max_spp=16, estimator="auto", resolution=(64, 48)), 16)
+    assert choice.sample_pattern == "BLUE_NOISE_ROUND" and choice.scatter_sampling
+    record = ChangeRecord()
+    assert apply_estimator(scene, choice, record) == []
+    assert blender.data.materials["Fog"].cycles.volume_sampling == "DISTANCE"
+    assert preferences.experimental.use_cycles_debug and not scene.render.use_persistent_data
+    record.restore()
+    assert settings_dump(scene) == before and volume_settings(blender) == media
+    assert (preferences.view.show_developer_ui, preferences.experimental.use_cycles_debug,
+            preferences.is_dirty) == debug

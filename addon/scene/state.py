@@ -199,6 +199,11 @@ def forget_session_counts() -> None:
     _session_counts.clear()
 
 
+def preserved_scene_open(scene) -> bool:
+    """Whether a ``preserved_scene`` block is open on ``scene``."""
+    return scene.as_pointer() in _open_blocks
+
+
 def scene_changes(scene) -> ChangeRecord:
     """The change record of the innermost ``preserved_scene`` block open on ``scene``: what
     is changed through it is put back when that block ends."""
