@@ -34,10 +34,9 @@ def batch(argv: list[str] | None = None, early_signals: list | tuple = ()) -> in
 
     args = arguments_after_separator(sys.argv) if argv is None else list(argv)
     with InterruptToCancel(before_work=True) as interrupt:
-        if early_signals or not interrupt.begin_work():
-            print("xsl-render: cancelled", file=sys.stderr)
-            raise SystemExit(130)
-        code = main(args, in_blender=True)
+        if early_signals:
+            interrupt.requested = True      # (``main`` says so once it would begin the work)
+        code = main(args, in_blender=True, begin_work=interrupt.begin_work)
     if code:
         raise SystemExit(code)
     return 0

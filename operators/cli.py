@@ -30,6 +30,7 @@ import re
 import sys
 import traceback
 from contextlib import nullcontext
+from typing import Callable
 
 from ..core import temporaries
 from ..core.checks import separate_files
@@ -105,8 +106,11 @@ def check_files(args, in_blender: bool = False) -> None:
     separate_files(inputs, outputs)
 
 
-def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
-    """Run one command; ``watcher``: the command line's signal watcher (``signals.py``)."""
+def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None,
+         begin_work: Callable[[], bool] | None = None) -> int:
+    """Run one command; ``watcher``: the command line's signal watcher (``signals.py``);
+    ``begin_work``: called once the command line is checked, False if the command was
+    cancelled before its work began (the batch entry's ``interrupt.InterruptToCancel``)."""
     argv = sys.argv[1:] if argv is None else argv
     try:
         args = build_parser(in_blender).parse_args(argv)
@@ -123,6 +127,9 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
     except InputError as error:
         print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
         return 2
+    if begin_work is not None and not begin_work():
+        print("xsl-render: cancelled", file=sys.stderr)
+        return 130
     interruptible = watcher is not None and getattr(command, "INTERRUPTIBLE", False)
     if interruptible:
         watcher.interrupt_main_thread()

@@ -6,8 +6,8 @@ and Python only runs signal handlers in the main thread once the render has retu
 batch entry watches SIGINT through Python's wakeup file descriptor, which the C-level handler
 writes at once, from a helper thread, around the whole command (``operators/batch.py``):
 
-- before the command's work begins (its imports, the parse and the checks), Ctrl-C ends it
-  with 130 and one line ("cancelled"), nothing done;
+- before the command's work begins (its imports, the parse and the checks: ``begin_work``),
+  Ctrl-C ends it with 130 and one line ("cancelled"), nothing done;
 - while it works, the first Ctrl-C says "cancelling after the current render" and asks the
   progress callback to cancel, which stops the work at the next safe point (between two tile
   renders, or after a single render) with nothing more written and the scene restored; from
@@ -60,16 +60,16 @@ class InterruptToCancel:
 
     def _interrupted(self) -> None:
         with self._lock:
+            if not self._working:
+                self.requested = True       # ``begin_work`` answers it: nothing was done
+                return
             if self.requested:
-                if self._working:
-                    os._exit(130)
-                return                      # before the work: the cancel is on its way
+                os._exit(130)
             if not temporaries.request_cancel():
                 return                      # the outputs are in place: too late to undo them
             self.requested = True
-            if self._working:
-                print("\nxsl-render: cancelling after the current render (Ctrl-C again to stop at once)",
-                      file=sys.stderr, flush=True)
+            print("\nxsl-render: cancelling after the current render (Ctrl-C again to stop at once)",
+                  file=sys.stderr, flush=True)
 
     def begin_work(self) -> bool:
         """The work begins (announced cancels from now on); False: a Ctrl-C came before."""
