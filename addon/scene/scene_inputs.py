@@ -21,13 +21,10 @@ def blend_inputs(blend: str | Path) -> tuple[dict, list[str]]:
 
 def scene_inputs(scene, blend: str | Path | None) -> dict | None:
     """The inputs of renders of ``scene`` opened from the file ``blend``, missing files among
-    them; None where that cannot be told: no file, or (``blend`` None, the batch entry) the
-    open file has changes not saved, which nothing on disk holds."""
-    import bpy
-
+    them; None for ``blend`` None (the batch entry): the file Blender has open may hold
+    changes no file on disk has (Blender counts even a file just opened as changed, so that
+    cannot be told)."""
     if blend is None:
-        if not bpy.data.filepath or bpy.data.is_dirty:
-            return None
-        blend = bpy.data.filepath
+        return None
     inputs, missing = blend_inputs(blend)
     return inputs | {"scene": scene.name, "missing": missing}

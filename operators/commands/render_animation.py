@@ -8,8 +8,8 @@ shared ray cache in ``DIR/zcache.npz`` (a temporary folder otherwise).
 A rerun continues: a frame whose files are whole and were made from the same request (the
 options, the scene's inputs: ``addon.scene.scene_inputs``, the frame, the Blender release;
 ``core.sampling.render_files.finished_frame``) is kept, and only the others are rendered.
-Where the scene's inputs cannot be told (the batch entry on a file with unsaved changes),
-every frame is rendered.
+Inside Blender (the batch entry) every frame is rendered: the open file may hold changes
+that the file on disk, which the digest would be made of, does not.
 """
 from __future__ import annotations
 
