@@ -27,7 +27,32 @@ def batch(argv=None) -> int:
 
         blender -b scene.blend --python-expr "import bl_ext.user_default.xsl_render as x; x.batch()" \\
             -- render --mode xsl --max-spp 16 --out out.exr
-    """
-    from .operators.batch import batch as run
 
-    return run(argv)
+    Its first instruction notes Ctrl-C instead of raising KeyboardInterrupt (inside an
+    import it would leave modules half made and print a traceback); the batch entry answers
+    a Ctrl-C noted before its work begins with 130 and one line.
+    """
+    signals = []
+    try:
+        import _signal
+
+        previous = _signal.signal(_signal.SIGINT, lambda signum, frame: signals.append(signum))
+    except KeyboardInterrupt:
+        raise SystemExit(_cancelled()) from None
+    except ValueError:                  # not the main thread: the signals are not ours to take
+        _signal = None
+    try:
+        from .operators.batch import batch as run
+
+        return run(argv, early_signals=signals)
+    finally:
+        if _signal is not None:
+            # (None: a handler not set from Python, which cannot be put back: Python's own.)
+            _signal.signal(_signal.SIGINT, previous if previous is not None else _signal.default_int_handler)
+
+
+def _cancelled() -> int:
+    import sys
+
+    print("xsl-render: cancelled", file=sys.stderr)
+    return 130

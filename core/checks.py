@@ -51,12 +51,15 @@ def _refused(name: str | None, value, text: str) -> InputError:
 
 
 def _from_text(value, parse, name: str | None, what: str):
-    """``value`` parsed when it is text; a bool is refused (Python counts it as a number)."""
+    """``value`` parsed when it is text (ASCII only: Python would read other scripts' digits,
+    ``١``, as numbers no one else takes); a bool is refused (Python counts it as a number)."""
     if isinstance(value, bool):
         raise _refused(name, value, f"must be {what}, not {value}")
     if not isinstance(value, str):
         return value
     try:
+        if not value.isascii():
+            raise ValueError(value)
         return parse(value.strip())
     except ValueError:
         raise _refused(name, value, f"must be {what}, not '{value}'") from None

@@ -165,3 +165,14 @@ def json_digest(data) -> str:
     """SHA-256 of ``data`` as canonical JSON (sorted keys, no spaces, no NaN)."""
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def file_identity(path: str | os.PathLike) -> list:
+    """[path, size, modification time in ns] of a file, what a rerun compares to tell whether
+    an input changed (a file put back by a move keeps all three); [path, None, None] for one
+    that does not exist."""
+    try:
+        status = os.stat(path)
+    except OSError:
+        return [str(path), None, None]
+    return [str(path), status.st_size, status.st_mtime_ns]

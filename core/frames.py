@@ -25,7 +25,8 @@ from .errors import SettingError, verbatim
 EXTENSION = ".exr"
 #: Digits Blender pads an appended frame number to.
 DEFAULT_DIGITS = 4
-_RANGE = re.compile(r"^\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*(?::\s*(\d+)\s*)?)?\Z")
+#: (ASCII digits only: Python's \d and int() would take other scripts' digits, ``١-٣``.)
+_RANGE = re.compile(r"^\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*(?::\s*(\d+)\s*)?)?\Z", re.ASCII)
 
 
 def parse_frame_range(text: str) -> range:

@@ -40,7 +40,8 @@ _lock = threading.RLock()
 _temporaries: dict[str, None] = {}     # paths (files or folders), in the order made
 _made_folders: list[Path] = []
 _swept: set[str] = set()
-_state = {"aborted": False, "sealed": False, "session": None, "saved_tempdir": None}
+_state = {"aborted": False, "sealed": False, "cancel_requested": False, "session": None,
+          "saved_tempdir": None}
 
 
 #: The pid in a temporary's name is padded to this many digits (Linux's largest pid_max has
@@ -60,9 +61,10 @@ def temporary_name(path: str | os.PathLike) -> Path:
 
 @contextmanager
 def gate():
-    """Held while outputs are renamed into place; raises Cancelled once :func:`abort` began."""
+    """Held while outputs are renamed into place; raises Cancelled once :func:`abort` began
+    or a cancel was asked for (:func:`request_cancel`)."""
     with _lock:
-        if _state["aborted"]:
+        if _state["aborted"] or _state["cancel_requested"]:
             raise Cancelled("cancelled")
         yield
 
@@ -142,6 +144,30 @@ def seal() -> None:
     (:func:`abort` then answers False and the command ends as it would have)."""
     with _lock:
         _state["sealed"] = True
+
+
+def request_cancel() -> bool:
+    """Ctrl-C where the process must not end at once (Blender's batch entry): from now on no
+    output goes into place (:func:`gate` raises Cancelled), so a cancel once announced is the
+    command's end whatever it was doing; False, and nothing changed, once :func:`seal` was
+    called (the outputs are in place already)."""
+    with _lock:
+        if _state["sealed"]:
+            return False
+        _state["cancel_requested"] = True
+        return True
+
+
+def cancel_requested() -> bool:
+    """Whether :func:`request_cancel` was called for the current command."""
+    return _state["cancel_requested"]
+
+
+def new_command() -> None:
+    """A command starts in a process that runs several (Blender's batch entry): nothing of it
+    is sealed or cancelled yet."""
+    with _lock:
+        _state["sealed"] = _state["cancel_requested"] = False
 
 
 def abort(decided=None) -> bool:

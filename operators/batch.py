@@ -11,7 +11,9 @@ command line, and nothing is written to the .blend.
 
 Exit: 0 returns normally (Blender goes on with its own arguments); a failure raises
 ``SystemExit`` with the command's code (2 bad input, 1 internal error, 130 cancelled), which
-ends Blender with that code after printing the one-line message.
+ends Blender with that code after printing the one-line message. Ctrl-C is answered from the
+entry's first instruction on (``operators/interrupt.py``): before the work begins, 130 and
+"cancelled"; during it, "cancelling after the current render", then 130.
 """
 from __future__ import annotations
 
@@ -23,13 +25,18 @@ def arguments_after_separator(argv: list[str]) -> list[str]:
     return list(argv[argv.index("--") + 1:]) if "--" in argv else []
 
 
-def batch(argv: list[str] | None = None) -> int:
+def batch(argv: list[str] | None = None, early_signals: list | tuple = ()) -> int:
     """Run one ``xsl-render`` command on the open file; ``argv`` defaults to what follows
-    ``--`` on Blender's command line."""
+    ``--`` on Blender's command line. ``early_signals``: the Ctrl-Cs noted since the entry's
+    first instruction (``xsl_render.batch``); more may come until the watcher is in place."""
     from .cli import main
+    from .interrupt import InterruptToCancel
 
     args = arguments_after_separator(sys.argv) if argv is None else list(argv)
-    code = main(args, in_blender=True)
+    with InterruptToCancel(before_work=True) as interrupt:
+        if early_signals:
+            interrupt.requested = True      # (``main`` says so once it would begin the work)
+        code = main(args, in_blender=True, begin_work=interrupt.begin_work)
     if code:
         raise SystemExit(code)
     return 0

@@ -26,12 +26,15 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import traceback
 from contextlib import nullcontext
+from typing import Callable
 
+from ..core import temporaries
 from ..core.checks import separate_files
-from ..core.errors import InputError
+from ..core.errors import Cancelled, InputError
 from ..core.files import output_set
 from .commands.argtypes import declared_files, file_options, register_safe_numbers
 from .commands.setting_flags import in_flags
@@ -41,11 +44,16 @@ from .signals import EXIT_CODES
 
 class OneLineParser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit code 2, and whose plain
-    ``type=int`` / ``type=float`` refuse what Blender cannot hold (NaN, inf, past 32 bits)."""
+    ``type=int`` / ``type=float`` refuse what Blender cannot hold (NaN, inf, past 32 bits).
+
+    A value that starts with a minus and a digit is a value, never an option: argparse takes
+    only plain negative numbers as values, so ``--frames -3--1`` (frames -3 to -1) had ended
+    in "expected one argument"."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         register_safe_numbers(self)
+        self._negative_number_matcher = re.compile(r"^-\d|^-\.\d")
 
     def error(self, message: str):  # noqa: D401 - argparse API
         command = self.prog.removeprefix("xsl-render").strip()
@@ -98,8 +106,11 @@ def check_files(args, in_blender: bool = False) -> None:
     separate_files(inputs, outputs)
 
 
-def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) -> int:
-    """Run one command; ``watcher``: the command line's signal watcher (``signals.py``)."""
+def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None,
+         begin_work: Callable[[], bool] | None = None) -> int:
+    """Run one command; ``watcher``: the command line's signal watcher (``signals.py``);
+    ``begin_work``: called once the command line is checked, False if the command was
+    cancelled before its work began (the batch entry's ``interrupt.InterruptToCancel``)."""
     argv = sys.argv[1:] if argv is None else argv
     try:
         args = build_parser(in_blender).parse_args(argv)
@@ -116,6 +127,9 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
     except InputError as error:
         print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
         return 2
+    if begin_work is not None and not begin_work():
+        print("xsl-render: cancelled", file=sys.stderr)
+        return 130
     interruptible = watcher is not None and getattr(command, "INTERRUPTIBLE", False)
     if interruptible:
         watcher.interrupt_main_thread()
@@ -124,6 +138,8 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
         try:
             with outputs:
                 code = args.run(args)
+                if temporaries.cancel_requested():
+                    raise Cancelled("cancelled")    # announced while it ran: honoured
                 if code:
                     raise _Failed(code)
         except _Failed as failed:
@@ -132,7 +148,8 @@ def main(argv: list[str] | None = None, in_blender: bool = False, watcher=None) 
             print(f"xsl-render: error: {in_flags(error)}", file=sys.stderr)
             code = 2
         except KeyboardInterrupt:
-            print("xsl-render: cancelled", file=sys.stderr)
+            if not temporaries.cancel_requested():      # else announced (``interrupt.py``)
+                print("xsl-render: cancelled", file=sys.stderr)
             code = 130
         except Exception as error:     # our bug, not the user's: say so in one line
             if os.environ.get("XSL_DEBUG"):

@@ -1,16 +1,24 @@
-"""Ctrl-C while Blender renders, where Blender owns the process (``blender -b ... x.batch()``).
+"""Ctrl-C where Blender owns the process (``blender -b ... x.batch()``).
 
 Blender runs a render in C and calls back into Python (Cycles' engine, status handlers);
 a KeyboardInterrupt raised there is caught and printed by Blender and the render goes on,
 and Python only runs signal handlers in the main thread once the render has returned. So the
-commands watch SIGINT through Python's wakeup file descriptor, which the C-level handler
-writes at once, from a helper thread: the first Ctrl-C asks the progress callback to cancel,
-which stops the work at the next safe point (between two tile renders, or after a single
-render) with nothing written and the scene restored; a second Ctrl-C exits at once.
+batch entry watches SIGINT through Python's wakeup file descriptor, which the C-level handler
+writes at once, from a helper thread, around the whole command (``operators/batch.py``):
 
-The ``xsl-render`` console script goes further (``signals.py``): SIGINT is blocked in every
-thread from its first instruction and its own watcher cancels at once, so there this context
-never sees a signal.
+- before the command's work begins (its imports, the parse and the checks: ``begin_work``),
+  Ctrl-C ends it with 130 and one line ("cancelled"), nothing done;
+- while it works, the first Ctrl-C says "cancelling after the current render" and asks the
+  progress callback to cancel, which stops the work at the next safe point (between two tile
+  renders, or after a single render) with nothing more written and the scene restored; from
+  the announcement on no output goes into place (``core.temporaries.request_cancel``), so
+  the command ends with 130 whatever it was doing, unless its outputs were already in place
+  (then the signal came too late and is ignored, silently); a second Ctrl-C exits at once.
+
+A command's own ``InterruptToCancel`` inside the batch entry's is that one. The
+``xsl-render`` console script goes further (``signals.py``): SIGINT is blocked in every
+thread from its first instruction and its own watcher cancels at once, so there this
+context never sees a signal.
 """
 from __future__ import annotations
 
@@ -19,14 +27,24 @@ import signal
 import sys
 import threading
 
+from ..core import temporaries
+
 
 class InterruptToCancel:
-    """Context manager (main thread only): Ctrl-C sets ``requested``; twice: exit 130 now."""
+    """Context manager (main thread only): Ctrl-C sets ``requested``; twice: exit 130 now.
 
-    def __init__(self):
+    ``before_work``: the work has not begun (the batch entry): a Ctrl-C is a cancel without
+    an announcement until ``begin_work``, which answers whether the work may begin."""
+
+    _active: "InterruptToCancel | None" = None          # the open one, for nested commands
+
+    def __init__(self, before_work: bool = False):
         self.requested = False
+        self._working = not before_work
+        self._lock = threading.Lock()
         self._saved = None
         self._watcher = None
+        self._nested = False
 
     def _watch(self, read_fd: int) -> None:
         while True:
@@ -37,33 +55,59 @@ class InterruptToCancel:
             if not data:
                 return
             for signum in data:
-                if signum != signal.SIGINT:
-                    continue
-                if self.requested:
-                    os._exit(130)
-                self.requested = True
-                print("\nxsl-render: cancelling after the current render (Ctrl-C again to stop at once)",
-                      file=sys.stderr, flush=True)
+                if signum == signal.SIGINT:
+                    self._interrupted()
+
+    def _interrupted(self) -> None:
+        with self._lock:
+            if not self._working:
+                self.requested = True       # ``begin_work`` answers it: nothing was done
+                return
+            if self.requested:
+                os._exit(130)
+            if not temporaries.request_cancel():
+                return                      # the outputs are in place: too late to undo them
+            self.requested = True
+            print("\nxsl-render: cancelling after the current render (Ctrl-C again to stop at once)",
+                  file=sys.stderr, flush=True)
+
+    def begin_work(self) -> bool:
+        """The work begins (announced cancels from now on); False: a Ctrl-C came before."""
+        with self._lock:
+            self._working = not self.requested
+            return self._working
 
     def __enter__(self) -> "InterruptToCancel":
+        if InterruptToCancel._active is not None:
+            self._nested = True
+            return InterruptToCancel._active
+        temporaries.new_command()
         read_fd, write_fd = os.pipe()
         os.set_blocking(write_fd, False)
-        # A Python-level handler must be installed for the C handler to write the wakeup fd;
-        # it does nothing itself (the watcher thread has already acted).
-        previous_handler = signal.signal(signal.SIGINT, lambda signum, frame: None)
-        previous_fd = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
         self._watcher = threading.Thread(target=self._watch, args=(read_fd,), daemon=True)
         self._watcher.start()
+        # The descriptor first: a signal that comes while the handler changes is written to
+        # it either way. A Python-level handler must be installed for the C handler to write
+        # the descriptor; it does nothing itself (the watcher thread has already acted).
+        previous_fd = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+        previous_handler = signal.signal(signal.SIGINT, lambda signum, frame: None)
         self._saved = (previous_handler, previous_fd, read_fd, write_fd)
+        InterruptToCancel._active = self
         return self
 
     def __exit__(self, *exc) -> None:
+        if self._nested:
+            return
+        InterruptToCancel._active = None
         previous_handler, previous_fd, read_fd, write_fd = self._saved
+        # (None: a handler not set from Python, which cannot be put back: Python's own.)
+        signal.signal(signal.SIGINT, previous_handler if previous_handler is not None
+                      else signal.default_int_handler)
         signal.set_wakeup_fd(previous_fd)
-        signal.signal(signal.SIGINT, previous_handler)
         os.close(write_fd)          # the watcher reads end-of-file and stops
         self._watcher.join(timeout=1.0)
         os.close(read_fd)
+        temporaries.new_command()
 
     def wrap(self, callback):
         """A progress callback that also answers "cancel" once Ctrl-C was pressed."""

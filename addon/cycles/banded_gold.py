@@ -58,10 +58,10 @@ def gold_band_steps(scene, options: RenderOptions, budget: int = BAND_PIXEL_SAMP
                 tiles.append(tile_entry(band, rendered) | {"window": list(window)})
         phases = {"maps": 0.0, "renders": time.perf_counter() - started - waited}
         image, samples = compositor.result()
-        image, denoise_guides = finish_image(image, None if guides is None else guides.result()[0], options,
-                                             phases)
+        image, denoise_guides, non_finite = finish_image(
+            image, None if guides is None else guides.result()[0], options, phases)
         stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings,
-                             renderer.sync_seconds, denoise_guides)
+                             renderer.sync_seconds, denoise_guides, non_finite)
     stats.bands = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,
                       "note": "bit-identical to one full-frame render; the wall time includes "
                               "the margin rows"}

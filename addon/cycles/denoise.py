@@ -30,6 +30,12 @@ medians of 3 seeds: road 0.0400 -> 0.0392, balls_a 0.0375 -> 0.0274, balls_b 0.0
 0.0473, statue 0.0442 -> 0.0409; 32 spp: 2-8 %) for 0.3-0.45 s at 256x192 and 1.1 s at
 512x288 on 2 cores (``bench/bench_denoise_guides.py``). Guides from a surface-only render, or
 none, helped some scenes and hurt road (README, "Denoising guides in fog").
+
+Light too strong for 32-bit floats: infinite or NaN values are set to 0 first, as Cycles
+sets a non-finite sample (``core.sampling.finite_pixels``; one Inf spreads over OIDN's
+output). And OIDN's HDR auto-exposure sums each bin's luminance in 32-bit floats, so a frame
+whose values reach about 1e36 (an emitter of 1e37 seen through fog) comes back all black: such
+a frame is scaled by a power of two (exact) to at most ``OIDN_PEAK`` before and back after.
 """
 from __future__ import annotations
 
@@ -39,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core.sampling.finite_pixels import zero_non_finite
 from .oidn_library import QUALITY_BALANCED, QUALITY_HIGH
 from .oidn_library import load as load_oidn
 from .render import read_exr_parts
@@ -52,6 +59,9 @@ PREFILTER_COST = 4.0
 #: (settings, prefilter, guides), then regenerate the shipped reference
 #: (tools/regenerate_reference.py); a test compares the shipped entry's key.
 DENOISE_VERSION = "oidn-hdr-fast-prefilter-1"
+#: The largest value a frame goes to OIDN with (2^100; a frame up to 2^120 denoised within
+#: 2e-6 of itself at 1 in a test, 1e37 came back black). Frames below it are untouched.
+OIDN_PEAK = 2.0 ** 100
 
 
 def _image(bpy, name: str, pixels: np.ndarray, non_color: bool):
@@ -83,6 +93,13 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
     its own at quality Balanced, and then taken as clean (OIDN's and Blender's "Accurate"
     prefilter; auto's choice, see ``PREFILTER_COST``).
     """
+    rgba = zero_non_finite(rgba)[0]
+    albedo = None if albedo is None else zero_non_finite(albedo, whole_frame=False)[0]
+    normal = None if normal is None else zero_non_finite(normal, whole_frame=False)[0]
+    alpha = rgba[..., 3:]
+    scale = _scale_into_range(rgba)
+    if scale != 1.0:
+        rgba = rgba[..., :3] * np.float32(scale)
     library = load_oidn()
     if library is not None:
         # Rows bottom first, as the compositor hands Blender's images to OIDN: its network is
@@ -97,10 +114,21 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
                               quality=QUALITY_HIGH)[::-1]
     else:
         out = _compositor_denoise(rgba, albedo, normal, "Accurate" if prefilter_guides else "Fast")
-    denoised = np.empty_like(rgba, dtype=np.float32)
+    denoised = np.empty(alpha.shape[:2] + (3 + alpha.shape[2],), dtype=np.float32)
     denoised[..., :3] = np.maximum(out, 0.0)       # OIDN may undershoot slightly below zero
-    denoised[..., 3:] = rgba[..., 3:]
+    if scale != 1.0:
+        denoised[..., :3] = np.minimum(denoised[..., :3] / np.float64(scale), np.finfo(np.float32).max)
+    denoised[..., 3:] = alpha
     return denoised
+
+
+def _scale_into_range(rgba: np.ndarray) -> float:
+    """The power of two that brings the frame's largest colour value to at most ``OIDN_PEAK``
+    (1 where it is there already)."""
+    peak = float(np.max(rgba[..., :3])) if rgba.size else 0.0
+    if peak <= OIDN_PEAK:
+        return 1.0
+    return 2.0 ** (np.frexp(OIDN_PEAK)[1] - 1 - np.frexp(peak)[1])
 
 
 def _compositor_denoise(rgba: np.ndarray, albedo: np.ndarray | None,

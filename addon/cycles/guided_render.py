@@ -432,14 +432,14 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         merged, merged_guides = image.result(), guides.result()
         samples = image.samples.astype(np.float32)
         phases["composite"] = clock.now() - began
-        merged, denoise_guides = finish_image(merged, merged_guides if options.denoise else None, options,
-                                              phases, allow_prefilter)
+        merged, denoise_guides, non_finite = finish_image(merged, merged_guides if options.denoise else None,
+                                                          options, phases, allow_prefilter)
         if pace is not None and denoise_guides is not None:
             pace.observe_denoise(phases["denoise"], denoise_guides["prefiltered"], denoise_guides["noisy"])
         if used != options.volume_estimator():      # (a fixed choice is a new object each call)
             options = replace(options, estimator_choice=used)
         stats = render_stats("guided", scene, options, width, height, samples, phases, tiles, warnings,
-                             denoise_guides=denoise_guides)
+                             denoise_guides=denoise_guides, non_finite_pixels=non_finite)
     # Phases add up to the wall time (progress reports and bookkeeping go to "other").
     phases["other"] = max(0.0, clock.now() - sum(phases.values()))
     if sync_outside:

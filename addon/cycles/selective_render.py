@@ -27,12 +27,15 @@ import numpy as np
 from ...core.errors import InputError, SettingError
 from ...core.progress import Progress, ProgressCallback, Steps, TileProgress, run_steps
 from ...core.sampling.composite import Compositor, crop, render_window
+from ...core.sampling.finite_pixels import non_finite_warning, zero_non_finite
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_stats import RenderStats
 from ...core.sampling.tile_plan import Rect, check_director_map, make_plan
+from ..scene.carriers import kept_reason
+from ..scene.changes import ChangeRecord
 from ..scene.geometry import step_setting
 from ..scene.probe import camera_model, render_size
-from ..scene.state import preserved_scene
+from ..scene.state import preserved_scene, scene_changes
 from .sample_pattern import apply_sample_pattern
 from .tile_render import CyclesWindowRenderer, RenderedWindow
 
@@ -63,8 +66,7 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
         scene.render.resolution_x, scene.render.resolution_y = options.resolution
         scene.render.resolution_percentage = 100
     camera_model(scene)                     # InputError for a missing or non-camera camera
-    apply_estimator(scene, options.volume_estimator())
-    warnings = []
+    warnings = apply_estimator(scene, options.volume_estimator())
     if scene.render.engine != "CYCLES":
         warnings.append(f"scene '{scene.name}' renders with {scene.render.engine}; this run "
                         f"uses Cycles (the scene keeps {scene.render.engine})")
@@ -72,35 +74,48 @@ def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     return width, height, warnings
 
 
-def apply_estimator(scene, choice) -> None:
-    """Set Cycles' volume estimator as ``choice`` says (inside ``preserved_scene``), the
-    materials' and the world's own steps too where auto gave some media coarser ones, and
-    the sample pattern, the light tree and (while it ray-marches) the media's volume
-    sampling where auto chose them."""
+def apply_estimator(scene, choice, changes: ChangeRecord | None = None) -> list[str]:
+    """Set Cycles' volume estimator as ``choice`` says, the materials' and the world's own
+    steps too where auto gave some media coarser ones, and the sample pattern, the light
+    tree and (while it ray-marches) the media's volume sampling where auto chose them.
+
+    Every setting goes through ``changes`` (by default the record of the innermost
+    ``preserved_scene`` block, ``scene_changes``), which puts it back; a medium's material
+    or world is found by identity (``addon.scene.carriers``). Returns warnings: a medium
+    whose settings may not be changed (linked from a library) keeps its own."""
+    changes = changes if changes is not None else scene_changes(scene)
     if choice.sample_pattern is not None:
-        apply_sample_pattern(scene, choice.sample_pattern)
-    if choice.light_tree is not None and scene.cycles.use_light_tree != choice.light_tree:
-        scene.cycles.use_light_tree = choice.light_tree
+        apply_sample_pattern(scene, choice.sample_pattern, changes)
+    if choice.light_tree is not None:
+        changes.set(scene.cycles, "use_light_tree", choice.light_tree)
     if choice.biased is None:
-        return
-    scene.cycles.volume_biased = bool(choice.biased)
+        return []
+    changes.set(scene.cycles, "volume_biased", bool(choice.biased))
+    if choice.biased and choice.step_rate is not None:
+        changes.set(scene.cycles, "volume_step_rate", float(choice.step_rate))
     # (A settle from ray marching to null scattering puts the media's own methods back.)
     methods = (choice.scatter_sampling if choice.biased else choice.scatter_own) or {}
-    for key, method in methods.items():
-        settings = step_setting(key)[0]
-        if settings.volume_sampling != method:
-            settings.volume_sampling = method
-    if choice.biased and choice.step_rate is not None:
-        scene.cycles.volume_step_rate = float(choice.step_rate)
-    for key, value in (choice.medium_settings or {}).items():
-        settings, name = step_setting(key)
-        setattr(settings, name, float(value))
+    settings = [(key, "volume_sampling", method) for key, method in methods.items()]
+    settings += [(key, None, float(value)) for key, value in (choice.medium_settings or {}).items()]
+    warnings = []
+    for key, name, value in settings:
+        kept = kept_reason(key)
+        if kept is not None:
+            warnings.append(kept)
+            continue
+        struct, step = step_setting(key)
+        changes.set(struct, name or step, value)
+    return list(dict.fromkeys(warnings))
 
 
 def render_stats(mode: str, scene, options: RenderOptions, width: int, height: int,
                  samples: np.ndarray, phases: dict, tiles: list[dict], warnings: list[str],
-                 cycles_sync_s: float | None = None, denoise_guides: dict | None = None) -> RenderStats:
-    """What every mode records (``phases`` is kept, not copied: later phases add to it)."""
+                 cycles_sync_s: float | None = None, denoise_guides: dict | None = None,
+                 non_finite_pixels: int = 0) -> RenderStats:
+    """What every mode records (``phases`` is kept, not copied: later phases add to it;
+    ``warnings`` too, which gets a line where ``non_finite_pixels`` were set to 0)."""
+    if non_finite_pixels:
+        warnings.append(non_finite_warning(non_finite_pixels))
     total = float(samples.sum(dtype=np.float64))
     estimator = options.volume_estimator()
     if estimator.seconds:
@@ -112,7 +127,8 @@ def render_stats(mode: str, scene, options: RenderOptions, width: int, height: i
         mean_spp=total / (width * height), gold_samples=width * height * options.max_spp,
         renders=len(tiles), tiles=tiles, options=options.to_dict(),
         estimator=estimator.to_dict() | {"described": estimator.describe()}, warnings=warnings,
-        cycles_sync_s=cycles_sync_s, denoise_guides=denoise_guides)
+        cycles_sync_s=cycles_sync_s, denoise_guides=denoise_guides,
+        non_finite_pixels=non_finite_pixels or None)
 
 
 def tile_entry(window, rendered) -> dict:
@@ -150,13 +166,16 @@ def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptio
 
 
 def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
-                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None]:
-    """The frame as delivered: denoised once, whole (``options.denoise``), timed as a phase;
-    and, where auto may prefilter the denoising guides, what it decided (their noise, whether
-    that is noisy, whether they were prefiltered: ``RenderStats.denoise_guides``), else None.
-    ``allow_prefilter`` False: the caller could not afford the prefilter (``guided``)."""
+                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None, int]:
+    """The frame as delivered: its infinite or NaN pixels set to 0 (``core.sampling.
+    finite_pixels``: InputError when all are), denoised once, whole (``options.denoise``),
+    timed as a phase; where auto may prefilter the denoising guides, what it decided (their
+    noise, whether that is noisy, whether they were prefiltered: ``RenderStats.
+    denoise_guides``), else None; and the number of pixels set to 0. ``allow_prefilter``
+    False: the caller could not afford the prefilter (``guided``)."""
+    image, non_finite = zero_non_finite(image)
     if not options.denoise:
-        return image, None
+        return image, None, non_finite
     from ...core.sampling.denoise_guides import NOISY_GUIDE_MEDIAN, guide_noise
     from .denoise import denoise
 
@@ -172,7 +191,7 @@ def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOp
                   None if guides is None else guides[..., 3:6],
                   prefilter_guides=bool(record and record["prefiltered"]))
     phases["denoise"] = time.perf_counter() - started
-    return out, record
+    return out, record, non_finite
 
 
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
@@ -234,10 +253,10 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         started = time.perf_counter()
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
-        image, denoise_guides = finish_image(image, None if guides is None else guides.result()[0], options,
-                                             phases)
+        image, denoise_guides, non_finite = finish_image(
+            image, None if guides is None else guides.result()[0], options, phases)
         stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings,
-                             renderer.sync_seconds, denoise_guides)
+                             renderer.sync_seconds, denoise_guides, non_finite)
     stats.plan, stats.ideal_speedup = plan.to_dict(), plan.ideal_speedup
     stats.director_map_mean = float(data.mean())
     return RenderOutcome(image, samples, stats, warnings)
@@ -277,11 +296,11 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
-        image, denoise_guides = finish_image(rendered.pixels, rendered.guides, options, phases)
+        image, denoise_guides, non_finite = finish_image(rendered.pixels, rendered.guides, options, phases)
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings,
-                             renderer.sync_seconds, denoise_guides)
+                             renderer.sync_seconds, denoise_guides, non_finite)
     stats.budget, stats.noise_threshold = budget, adaptive_threshold
     if time_budget is not None:
         # Fewer passes than the ceiling and the whole limit used: the clock stopped it (not

@@ -44,7 +44,8 @@ from ...core.errors import InputError
 from ...core.sampling.sample_pattern import session_sequence
 from ..scene.probe import render_size
 from ..scene.shader_export import has_volume
-from ..scene.state import forget_session_counts, let_session_go, note_session_count, session_largest_count
+from ..scene.state import (forget_session_counts, let_session_go, note_session_count, scene_changes,
+                           session_largest_count)
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -70,7 +71,18 @@ def volume_materials(scene) -> list:
     found = {slot.material for ob in scene.objects for slot in ob.material_slots
              if slot.material is not None and hasattr(slot.material, "cycles")
              and slot.material.node_tree is not None and has_volume(slot.material.node_tree)}
-    return sorted(found, key=lambda material: material.name)
+    return sorted(found, key=lambda material: material.name_full)
+
+
+def _changed_materials(scene) -> list:
+    """The materials the open run changed (``scene_changes``): reached through instances or
+    Geometry Nodes, they need not be in any object's slots."""
+    import bpy
+
+    try:
+        return scene_changes(scene).datablocks(bpy.types.Material)
+    except RuntimeError:                    # no block open: nothing of ours changed
+        return []
 
 
 def _volume_settings(scene, materials) -> tuple:
@@ -83,7 +95,7 @@ def _volume_settings(scene, materials) -> tuple:
     world = getattr(scene.world, "cycles", None)
     return (bool(cycles.volume_biased), round(float(cycles.volume_step_rate), 6),
             None if world is None else (round(float(world.volume_step_size), 6), world.volume_sampling),
-            tuple((m.name, round(float(m.cycles.volume_step_rate), 6), m.cycles.volume_sampling)
+            tuple((m.as_pointer(), round(float(m.cycles.volume_step_rate), 6), m.cycles.volume_sampling)
                   for m in materials),
             cycles.sampling_pattern, bool(cycles.use_light_tree))
 
@@ -92,16 +104,16 @@ def _tag_volume_changes(scene, materials) -> bool:
     """Whether the volume settings differ from what Cycles last synced for the scene; the
     materials and the world whose own step changed are tagged here (a scene tag alone does
     not make Cycles read a material's step rate again), the scene by the caller."""
-    import bpy
-
     synced, now = _synced_volumes.get(scene.as_pointer()), _volume_settings(scene, materials)
     if synced == now:
         return False
     # Nothing known (a run's first render): Cycles may hold any steps, tag them all.
     if (synced is None or synced[2] != now[2]) and scene.world is not None:
         scene.world.update_tag()
-    for name, *_ in set(now[3]) - set(() if synced is None else synced[3]):
-        bpy.data.materials[name].update_tag()
+    changed = {pointer for pointer, *_ in set(now[3]) - set(() if synced is None else synced[3])}
+    for material in materials:
+        if material.as_pointer() in changed:
+            material.update_tag()
     return True
 
 
@@ -224,6 +236,11 @@ class CyclesWindowRenderer:
             render.resolution_x, render.resolution_y = resolution
             self.width, self.height = full
 
+    def _volume_materials(self) -> list:
+        """The scene's volume materials and those the open run changed (``scene_changes``)."""
+        found = {m.as_pointer(): m for m in self.volume_materials + _changed_materials(self.scene)}
+        return sorted(found.values(), key=lambda material: (material.name_full, material.as_pointer()))
+
     @staticmethod
     def _assign(struct, name: str, value) -> bool:
         """Set a property only when it changes (every assignment makes Cycles re-check that
@@ -268,7 +285,7 @@ class CyclesWindowRenderer:
                    # A new sample count resets Cycles' session, which re-reads the time limit;
                    # only a new limit at the same count needs the (costly) re-sync.
                    new_limit and not new_count,
-                   _tag_volume_changes(scene, self.volume_materials)]
+                   _tag_volume_changes(scene, self._volume_materials())]
         if adaptive_threshold is not None:
             # Cycles reads the threshold at every render; tagging for it would re-sync the
             # scene for each rectangle (3.7 s each on balls_b, see the module docstring).
@@ -295,7 +312,7 @@ class CyclesWindowRenderer:
         if listen:
             bpy.app.handlers.render_stats.append(self._handler)
         started = time.perf_counter()
-        _synced_volumes[scene.as_pointer()] = _volume_settings(scene, self.volume_materials)
+        _synced_volumes[scene.as_pointer()] = _volume_settings(scene, self._volume_materials())
         # (Before the render: Cycles may have taken the count even where the render fails.)
         note_session_count(scene, samples)
         try:

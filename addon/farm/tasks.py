@@ -11,7 +11,8 @@ the frames (or rectangles) it had not finished.
 
 What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
 ``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
-task with nothing left to do returns at once. The pixels come from
+task with nothing left to do returns at once; only where the job's record of the files its
+scene reads no longer holds is the scene opened first, to list them (``scene_digest``). The pixels come from
 ``selective_render.render_rect`` and the dispatcher (``render_dispatch``), the same code
 ``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
 (selective), or is the render ``xsl-render render --mode guided`` makes (guided).
@@ -35,8 +36,9 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ...core.errors import InputError
-from ...core.farm.files import (FrameFiles, guided_inputs, load_plan, maps_inputs, renderer_version,
-                               scene_sha256, valid_plan, valid_tile, write_plan_record, write_tile)
+from ...core.farm.files import (FrameFiles, guided_inputs, known_scene_inputs, load_plan, maps_inputs,
+                               renderer_version, scene_sha256, valid_plan, valid_tile, write_plan_record,
+                               write_scene_inputs, write_tile)
 from ...core.farm.frame_outputs import FrameSummary, guided_frame_record, valid_frame_outputs, write_frame_outputs
 from ...core.farm.task_groups import plan_group
 from ...core.files import atomic_path, json_digest
@@ -44,6 +46,7 @@ from ...core.maps.camera_rays import CACHE_NAME
 from ...core.maps.files import write_map_set
 from ...core.maps.options import MapOptions
 from ...core.progress import ProgressCallback
+from ...core.sampling.finite_pixels import zero_non_finite
 from ...core.sampling.guided_plan import GuidedOptions
 from ...core.sampling.render_files import frame_attributes, preview_scale
 from ...core.sampling.render_options import RenderOptions
@@ -76,6 +79,28 @@ def _open(scene_path, scene_name: str, frame: int, device: str | None):
     if device is not None:
         use_device(scene, device)
     return scene
+
+
+def scene_digest(scene_path, output) -> str:
+    """The digest of what the job's scene is made from: the .blend and the identity of every
+    file it reads (``addon.scene.scene_inputs``), so that work made from other files is
+    redone. Known without Blender while the job's record of them holds
+    (``core.farm.files.known_scene_inputs``); else the scene is opened and they are listed
+    again, and a file it reads that does not exist fails the task (InputError): Blender would
+    render on without it (a fog-less frame, where a library is missing)."""
+    blend = scene_sha256(scene_path)
+    inputs = known_scene_inputs(output, blend)
+    if inputs is None:
+        from ..scene.blend_session import open_blend
+        from ..scene.scene_inputs import blend_inputs
+
+        open_blend(scene_path)
+        inputs, missing = blend_inputs(scene_path)
+        if missing:
+            more = f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""
+            raise InputError(f"the scene reads {missing[0]}, which does not exist{more}")
+        write_scene_inputs(output, inputs)
+    return json_digest(inputs)
 
 
 def _part(progress: ProgressCallback | None, start: float, end: float, prefix: str) -> ProgressCallback:
@@ -113,7 +138,7 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
     from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     outcomes, todo = {}, []
     for frame in frames:
         started = time.perf_counter()
@@ -159,7 +184,7 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
 
     log = log or (lambda line: None)
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     work = []
     for frame in frames:
         started = time.perf_counter()
@@ -216,8 +241,11 @@ def run_tiles_task(scene_path: str | Path, frames: Sequence[int], output: str | 
                 renderer, made_for = _window_renderer(renderer, made_for, scene, options)
                 for rect in todo:
                     piece = render_rect(renderer, rect, options)
-                    write_tile(files, record, rect, piece.pixels, piece.samples, guides=piece.guides, details={
-                        "group": group, "groups": groups, "spp": rect.spp,
+                    # (As a frame's are, before its composite denoises: core.sampling.finite_pixels.)
+                    pixels, non_finite = zero_non_finite(piece.pixels, whole_frame=False)
+                    guides = None if piece.guides is None else zero_non_finite(piece.guides, whole_frame=False)[0]
+                    write_tile(files, record, rect, pixels, piece.samples, guides=guides, details={
+                        "group": group, "groups": groups, "spp": rect.spp, "non_finite_pixels": non_finite,
                         "samples_rendered": piece.rendered.samples_rendered,
                         "seconds": piece.rendered.seconds,
                         "cycles_sync_s": piece.rendered.sync_seconds, "render_id": uuid.uuid4().hex,
@@ -267,7 +295,7 @@ def run_guided_task(scene_path: str | Path, scene_name: str, frames: Sequence[in
     from ..scene.blend_session import check_blend_file
 
     check_blend_file(scene_path)
-    digest = scene_sha256(scene_path)
+    digest = scene_digest(scene_path, output)
     uses_maps = guided.importance != "none"
     outcomes, inputs = {}, {}
     for frame in frames:

@@ -22,7 +22,7 @@ from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
                                                fixed_choice, homogeneous_choice, kept_null_scattering,
                                                kept_scene_settings, per_medium_rates)
-from ..scene.geometry import media_by_carrier, scan_scene, step_setting
+from ..scene.geometry import kept_carriers, media_by_carrier, scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
 from ..scene.probe import camera_model, render_size
 from .light_paths import light_path_predictor, scene_emitters
@@ -119,7 +119,8 @@ def _volumes(scene, options: RenderOptions, spp: float,
         # Kept for a time-budgeted still's settle, which may need finer rates or the
         # media's steps at another scene rate (``settled_for``).
         choice = replace(choice, remeasure=measure)
-    return done(replace(choice, **scatter))
+    kept = "".join(f"; {reason}" for reason in kept_carriers(media).values())
+    return done(replace(choice, reason=choice.reason + kept, **scatter))
 
 
 def _media_centre(geometry, media) -> np.ndarray:

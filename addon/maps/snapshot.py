@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.sampling.finite_pixels import zero_non_finite
 from ..cycles.render import render_passes
 from ..scene.state import let_session_go, preserved_scene
 
@@ -98,6 +99,8 @@ def render_snapshot(scene, size: tuple[int, int] | None = None, samples: int = S
         for layer in scene.view_layers:
             layer.cycles.denoising_store_passes = denoise
         passes = render_passes(scene, wanted)
+    # Light too strong for 32-bit floats: as every frame's (core.sampling.finite_pixels).
+    passes = {name: zero_non_finite(pixels, whole_frame=False)[0] for name, pixels in passes.items()}
     combined = passes["Combined"]
     if denoise:
         from ..cycles.denoise import denoise as run_denoiser

@@ -6,6 +6,8 @@ on the scene the artist already has open.
 from __future__ import annotations
 
 import gzip
+import sys
+from contextlib import contextmanager, redirect_stdout
 from pathlib import Path
 
 from ...core.errors import InputError
@@ -58,7 +60,8 @@ def open_blend(path: str | Path | None, scene_name: str | None = None):
         return _open_scene(scene_name)
     path = check_blend_file(path).resolve()
     try:
-        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+        with _reports_with_blenders_output():
+            bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
     except RuntimeError as error:
         first = str(error).strip().splitlines()[0] if str(error).strip() else "unreadable"
         raise InputError(f"cannot open {path}: {first}") from None
@@ -69,6 +72,25 @@ def open_blend(path: str | Path | None, scene_name: str | None = None):
         raise InputError(f"{path} has no scene named '{scene_name}' "
                          f"(it has: {', '.join(s.name for s in bpy.data.scenes)})")
     return scene
+
+
+@contextmanager
+def _reports_with_blenders_output():
+    """An operator's reports ("Info: Read library: ...") go where Blender's own output goes.
+
+    Blender prints them through Python's ``sys.stdout``, not its C output (file descriptor
+    1), which the command line sends to its log (``operators/console.py``) while keeping
+    ``sys.stdout`` for its own lines: they would land among those."""
+    stream = sys.__stdout__
+    if stream is None:
+        yield
+        return
+    sys.stdout.flush()
+    with redirect_stdout(stream):
+        try:
+            yield
+        finally:
+            stream.flush()
 
 
 def _open_scene(scene_name: str | None):

@@ -8,6 +8,8 @@ but Blender's data, and nothing is written.
 """
 from __future__ import annotations
 
+import os
+
 from ...core.farm.assets import SceneFiles, ScenePath, scene_files
 
 
@@ -17,9 +19,20 @@ def _absolute(bpy, datablock) -> str:
     return bpy.path.abspath(datablock.filepath, library=datablock.library)
 
 
+def _names_a_folder(path: str) -> bool:
+    return path.endswith(("/", "\\"))
+
+
 def scene_paths(bpy) -> tuple[list[ScenePath], list[str]]:
-    """(every path the open file reads, absolute and marked; the same paths as written)."""
+    """(every path the open file reads, absolute and marked; the same paths as written).
+
+    An image's or volume's path that names a folder is no file it reads: a volume whose
+    grids Geometry Nodes make keeps such a path (statue's ``//../../../../``, which is "/"
+    from where the file lies)."""
     marked: dict[str, ScenePath] = {}
+    folders = [item for item in (*bpy.data.images, *bpy.data.volumes)
+               if item.filepath and _names_a_folder(item.filepath)]
+    no_file = {os.path.normpath(_absolute(bpy, item)) for item in folders}
     for image in bpy.data.images:
         if image.packed_file is not None or not image.filepath:
             continue
@@ -33,10 +46,12 @@ def scene_paths(bpy) -> tuple[list[ScenePath], list[str]]:
         if volume.packed_file is None and volume.filepath and volume.is_sequence:
             path = _absolute(bpy, volume)
             marked[path] = ScenePath(path, sequence=True)
-    paths = [marked.get(path, ScenePath(path)) for path in bpy.utils.blend_paths(absolute=True)]
+    paths = [marked.get(path, ScenePath(path)) for path in bpy.utils.blend_paths(absolute=True)
+             if os.path.normpath(path) not in no_file]
     listed = {item.path for item in paths}
     paths += [item for path, item in marked.items() if path not in listed]
-    raw = [path for path in bpy.utils.blend_paths(absolute=False)]
+    raw = [path for path in bpy.utils.blend_paths(absolute=False)
+           if path not in {item.filepath for item in folders}]
     return paths, raw
 
 

@@ -31,6 +31,7 @@ from ...core.media.grid_nodes import grid_names
 from ...core.media.ray_marching import procedural_step, voxel_step
 from ...core.media.shader_graph import ShaderGraph, uses_default_coordinates
 from ...core.media.volume_medium import VolumeMedium, check_densities, volume_density_scale
+from .carriers import carrier, carrier_key, kept_reason
 from .probe import renderable_instances
 from .shader_export import export_volume_graph, has_surface, has_volume
 from .volume_grids import GridReadError, volume_grids
@@ -158,7 +159,7 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
         if not graph.empty:
             media.append(VolumeMedium(key=f"world:{world.name}", name=world.name, kind="world",
                                       material=None, graph=graph,
-                                      extra={"cycles_step": _world_step(world)}))
+                                      extra={"cycles_step": _world_step(world), "carrier": carrier_key(world)}))
     surfaces: list[Triangles] = []
     surface_medium: list[np.ndarray] = []
     volumes: dict[str, Triangles] = {}
@@ -195,7 +196,8 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
                     world_to_object=np.linalg.inv(m),
                     # The evaluated volume's setting: geometry nodes that make the grids
                     # make a new volume, with the default (object space), as Cycles sees it.
-                    density_scale=volume_density_scale(m, ob.data.render.space == "OBJECT"))
+                    density_scale=volume_density_scale(m, ob.data.render.space == "OBJECT"),
+                    extra={"carrier": carrier_key(material)})
                 volume_objects.append((medium, ob.original, m, len(volume_slots),
                                        _volume_interpolation(material)))
                 media.append(medium)
@@ -236,7 +238,8 @@ def scan_scene(scene, depsgraph) -> tuple[SceneGeometry, list[VolumeMedium]]:
             medium = VolumeMedium(key=key, name=ob.name, kind="mesh", material=material.name,
                                   graph=graph_of(material.node_tree, f"mat:{material.name}"),
                                   world_to_object=np.linalg.inv(m), texspace=texspace,
-                                  extra={"cycles_step": step * _material_step_rate(material)})
+                                  extra={"cycles_step": step * _material_step_rate(material),
+                                         "carrier": carrier_key(material)})
             if len(volume_slots) > 1:
                 medium.unsupported = "an object with several volume materials"
             elif _reads_attributes(medium.graph):
@@ -306,35 +309,47 @@ def _attach_grids(medium: VolumeMedium, scene, ob, depsgraph, object_to_world,
 
 def _slot_material(ob, medium: VolumeMedium):
     return next((slot.material for slot in ob.material_slots
-                 if slot.material is not None and slot.material.name == medium.material), None)
+                 if slot.material is not None and carrier_key(slot.material) == _carrier(medium)), None)
+
+
+def _carrier(medium: VolumeMedium) -> str | None:
+    """The key of what carries a medium's own settings (``carriers``), None for neither."""
+    if "carrier" in medium.extra:
+        return medium.extra["carrier"]
+    if medium.kind == "world":
+        return f"world:{medium.name}"
+    return None if medium.material is None else f"material:{medium.material}"
 
 
 def media_by_carrier(media, keep=None) -> dict:
     """What carries each medium's own settings in Blender -> the indices of its media:
     "world:<name>" (the world's Cycles settings) or "material:<name>" (the material's,
-    shared by its users); media without either, or that ``keep(medium)`` refuses, left out.
-    ``step_setting`` reads a key's settings."""
+    shared by its users; the names are full names: ``carriers``); media without either,
+    whose carrier a run may not change (``kept_carriers``), or that ``keep(medium)``
+    refuses, left out. ``step_setting`` reads a key's settings."""
     groups: dict = {}
     for index, medium in enumerate(media):
-        if keep is not None and not keep(medium):
+        key = _carrier(medium)
+        if key is None or (keep is not None and not keep(medium)):
             continue
-        if medium.kind == "world":
-            groups.setdefault(f"world:{medium.name}", []).append(index)
-        elif medium.material is not None:
-            groups.setdefault(f"material:{medium.material}", []).append(index)
-    return {key: tuple(members) for key, members in groups.items()}
+        groups.setdefault(key, []).append(index)
+    return {key: tuple(members) for key, members in groups.items() if kept_reason(key) is None}
+
+
+def kept_carriers(media) -> dict[str, str]:
+    """The carriers of ``media`` whose settings a run may not change -> why (linked from a
+    library, or a name two datablocks share): their media keep their own settings."""
+    keys = dict.fromkeys(key for key in map(_carrier, media) if key is not None)
+    return {key: reason for key in keys if (reason := kept_reason(key)) is not None}
 
 
 def step_setting(key: str) -> tuple[object, str]:
     """Where the step of the media a key of ``estimator_choice.step_carriers`` names is set:
     (the world's Cycles settings, "volume_step_size") for "world:<name>", (the material's,
-    "volume_step_rate") for "material:<name>"."""
-    import bpy
-
-    kind, name = key.split(":", 1)
-    if kind == "world":
-        return bpy.data.worlds[name].cycles, "volume_step_size"
-    return bpy.data.materials[name].cycles, "volume_step_rate"
+    "volume_step_rate") for "material:<name>"; the datablock found by identity
+    (``carriers.carrier``)."""
+    settings = carrier(key).cycles
+    return settings, "volume_step_size" if key.startswith("world:") else "volume_step_rate"
 
 
 def _material_step_rate(material) -> float:

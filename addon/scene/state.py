@@ -7,11 +7,16 @@ them back afterwards, whether the block finishes, raises, or is cancelled.
 
 Materials and worlds are never edited in place: temporary copies are assigned to the
 slots (``swap_material``) and the originals are put back; every datablock created inside
-the block is removed at the end unless it is handed to ``keep``.
+the block is removed at the end unless it is handed to ``keep``. A setting of a datablock
+found anywhere else (a medium's material reached through an instance or Geometry Nodes, a
+world) is changed through the block's change record (``scene_changes``), which puts it back
+by identity (``addon.scene.changes``).
 """
 from __future__ import annotations
 
 from contextlib import contextmanager
+
+from .changes import ChangeRecord, plain
 
 # RNA property types we record and restore by value.
 _VALUE_TYPES = {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"}
@@ -48,15 +53,6 @@ def rna_values(struct, skip: tuple[str, ...] = ()) -> dict:
     return values
 
 
-def _plain(value):
-    """An RNA value in the form rna_values records it (arrays as tuples, enum sets frozen)."""
-    if isinstance(value, set):
-        return frozenset(value)
-    if hasattr(value, "__len__") and not isinstance(value, str) and not _is_id(value):
-        return tuple(value)
-    return value
-
-
 def _is_id(value) -> bool:
     import bpy
 
@@ -68,7 +64,7 @@ def restore_values(struct, values: dict) -> None:
     for _ in range(2):
         for name, value in values.items():
             try:
-                if _plain(getattr(struct, name)) != value:
+                if plain(getattr(struct, name)) != value:
                     setattr(struct, name, set(value) if isinstance(value, frozenset) else value)
             except (AttributeError, TypeError, ValueError, RuntimeError):
                 # A property that is only settable in some states; the second pass retries.
@@ -129,10 +125,17 @@ def _structs(scene) -> dict:
 
 
 def settings_dump(scene) -> dict:
-    """Every recorded setting of the scene, render, Cycles and view layers, for comparing."""
+    """Every recorded setting of the scene, render, Cycles and view layers, and the Cycles
+    settings of every material and world of the file (a run may reach them through
+    instances, Geometry Nodes or libraries), for comparing."""
+    import bpy
+
     dump = {name: rna_values(struct) for name, struct in _structs(scene).items()}
     dump["material_slots"] = _material_slots(scene)
     dump["hide_render"] = {ob.name: ob.hide_render for ob in scene.objects}
+    dump["datablocks_cycles"] = {f"{type(item).__name__}:{item.name_full}": rna_values(item.cycles)
+                                 for collection in (bpy.data.materials, bpy.data.worlds)
+                                 for item in collection if hasattr(item, "cycles")}
     return dump
 
 
@@ -142,11 +145,13 @@ def _material_slots(scene) -> dict:
 
 
 class SceneState:
-    """Handle given to the body of ``preserved_scene``: swap materials, keep datablocks."""
+    """Handle given to the body of ``preserved_scene``: swap materials, keep datablocks, and
+    ``changes``, the block's change record (``scene_changes``)."""
 
     def __init__(self, scene):
         self.scene = scene
         self._kept: set = set()
+        self.changes = ChangeRecord()
 
     def swap_material(self, ob, slot_index: int, material, link: str | None = None) -> None:
         """Put ``material`` into a slot for the duration of the block (the original returns).
@@ -194,6 +199,21 @@ def forget_session_counts() -> None:
     _session_counts.clear()
 
 
+def preserved_scene_open(scene) -> bool:
+    """Whether a ``preserved_scene`` block is open on ``scene``."""
+    return scene.as_pointer() in _open_blocks
+
+
+def scene_changes(scene) -> ChangeRecord:
+    """The change record of the innermost ``preserved_scene`` block open on ``scene``: what
+    is changed through it is put back when that block ends."""
+    records = _open_records.get(scene.as_pointer())
+    if not records:
+        raise RuntimeError(f"no preserved_scene block is open on scene '{scene.name}': "
+                           "its changes would not be put back")
+    return records[-1]
+
+
 @contextmanager
 def preserved_scene(scene):
     """Record the scene's settings, run the block, put everything back.
@@ -201,9 +221,10 @@ def preserved_scene(scene):
     Restores: scene, render, image, colour-management, Cycles and view-layer settings
     (frame, camera, world, engine, samples, border, output path, persistent data, passes,
     volume flags, material override), material slot assignments and object render
-    visibility, and the animated values of the scene's frame when the block changed the
-    frame; removes datablocks the block created (unless kept). The outermost block also puts
-    back the Blender preferences a debug sample pattern turns on (``DEBUG_PATTERN_PREFERENCES``).
+    visibility, every setting changed through the block's change record (``scene_changes``),
+    and the animated values of the scene's frame when the block changed the frame; removes
+    datablocks the block created (unless kept). The outermost block also puts back the
+    Blender preferences a debug sample pattern turns on (``DEBUG_PATTERN_PREFERENCES``).
     """
     import bpy
 
@@ -218,18 +239,37 @@ def preserved_scene(scene):
     key = scene.as_pointer()
     preferences = _preference_values() if key not in _open_blocks else None
     _open_blocks[key] = _open_blocks.get(key, 0) + 1
+    _open_records.setdefault(key, []).append(state.changes)
     try:
         yield state
     finally:
         moved = (scene.frame_current, scene.frame_subframe) != frame
         _open_blocks[key] -= 1
+        _open_records[key].pop()
         outermost = not _open_blocks[key]
         if outermost:
-            del _open_blocks[key]
+            del _open_blocks[key], _open_records[key]
+        # What the run changed through its records, for the outermost block to tag.
+        changed = _changed_datablocks.setdefault(key, {})
+        changed.update((item.as_pointer(), item) for item in state.changes.datablocks())
         touched = _volume_changes(structs, saved) if outermost else set()
         # Settings first: they matter most and cannot fail as a whole.
+        failure = None
+        try:
+            state.changes.restore()
+        except (AttributeError, TypeError, ValueError, RuntimeError) as error:
+            failure = error                 # the rest still goes back; raised at the end
         for name, struct in structs.items():
             restore_values(struct, saved[name])
+        if outermost:
+            changed = _changed_datablocks.pop(key)
+            for item in changed.values():
+                try:
+                    item.update_tag()       # their own settings changed (a material's step)
+                except ReferenceError:
+                    pass
+            if changed:
+                scene.update_tag()
         if touched:
             # Cycles' volume settings (and its sample pattern) are add-on properties, which do
             # not tag the scene: with the artist's persistent data on, their next render would
@@ -269,10 +309,16 @@ def preserved_scene(scene):
                 if pointer not in before[name] and pointer not in state._kept \
                         and not _render_output(item):
                     collection.remove(item)
+        if failure is not None:
+            raise failure
 
 
 #: preserved_scene blocks open per scene (its pointer): they nest (a range around its frames).
 _open_blocks: dict[int, int] = {}
+#: Their change records, innermost last (``scene_changes``).
+_open_records: dict[int, list[ChangeRecord]] = {}
+#: Per scene, the datablocks its open blocks' records changed: the outermost tags them.
+_changed_datablocks: dict[int, dict] = {}
 
 
 def _volume_changes(structs: dict, saved: dict) -> set[str]:

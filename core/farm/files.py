@@ -15,6 +15,10 @@ Layout under the job's output folder (``frame`` zero-padded to four digits, as B
     work/frame_0001/maps/     xsl-render maps output              (maps step)
     work/frame_0001/plan.json the tile plan + the record of the maps step
     work/frame_0001/tiles/r<row0>-<row1>_c<col0>-<col1>.exr/.json   one per rectangle (tile steps)
+    .scene_inputs.json        the .blend's hash and the identity of every file it reads
+
+The digest of the inputs covers the scene's files, not the .blend alone: a library, texture
+or OpenVDB cache that changed makes the work redone (``addon.farm.tasks.scene_digest``).
 
 A rectangle's record depends on its window and samples, not on the map it came from, so a
 new plan (other map weights) re-renders only the rectangles that changed. A guided job has no
@@ -32,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..files import file_sha256, json_digest, write_json
+from ..files import file_identity, file_sha256, json_digest, write_json
 from ..imageio import read_image, write_exr
 from ..sampling.render_options import RenderOptions
 from ..sampling.tile_plan import Rect, TilePlan
@@ -49,6 +53,37 @@ def scene_sha256(path: str | os.PathLike) -> str:
         return file_sha256(path)
     except OSError as error:
         raise InputError(f"cannot read the scene {path}: {error.strerror or error}") from None
+
+
+def scene_inputs_path(output: str | os.PathLike) -> Path:
+    """Where a job records the files its scene reads (``write_scene_inputs``): hidden beside
+    the frames, as a guided job has no work folder."""
+    return Path(output) / ".scene_inputs.json"
+
+
+def write_scene_inputs(output: str | os.PathLike, inputs: dict) -> Path:
+    """Record what the job's scene is made from (``addon.scene.scene_inputs.blend_inputs``:
+    the .blend's hash, the identities of the files it reads), so that later tasks know it
+    without opening the scene."""
+    return write_json(scene_inputs_path(output), {"format": RECORD_FORMAT, "kind": "xsl-render farm scene",
+                                                  "inputs": inputs})
+
+
+def known_scene_inputs(output: str | os.PathLike, blend_sha256: str) -> dict | None:
+    """The recorded inputs of the job's scene when the .blend has the hash ``blend_sha256``
+    and every file it reads still has its recorded identity; else None (a task then opens
+    the scene to list them again)."""
+    record = read_record(scene_inputs_path(output))
+    if record is None or record.get("kind") != "xsl-render farm scene":
+        return None
+    inputs = record.get("inputs")
+    try:
+        if inputs["blend_sha256"] != blend_sha256 or \
+                any(file_identity(entry[0]) != list(entry) for entry in inputs["files"]):
+            return None
+    except (KeyError, TypeError, IndexError):
+        return None
+    return inputs
 
 
 def renderer_version() -> str:
@@ -136,8 +171,9 @@ class FrameFiles:
 
 def maps_inputs(scene_digest: str, scene_name: str, frame: int, mode: str, map_options: dict,
                 options: RenderOptions) -> dict:
-    """Everything the maps and the plan of a frame are made from."""
-    return {"scene_sha256": scene_digest, "scene_name": scene_name, "frame": frame, "mode": mode,
+    """Everything the maps and the plan of a frame are made from (``scene_digest``: the
+    scene's inputs, the files it reads among them)."""
+    return {"scene_inputs": scene_digest, "scene_name": scene_name, "frame": frame, "mode": mode,
             "map_options": map_options, "options": options.to_dict(), "blender": renderer_version()}
 
 
@@ -146,7 +182,7 @@ def guided_inputs(scene_digest: str, scene_name: str, frame: int, guided: dict,
     """Everything a guided frame is rendered from: the time budget is one of them (a frame
     rendered with another budget is another frame); the map options only when the
     importance map uses them (``map_options`` None otherwise)."""
-    return {"scene_sha256": scene_digest, "scene_name": scene_name, "frame": frame, "mode": "guided",
+    return {"scene_inputs": scene_digest, "scene_name": scene_name, "frame": frame, "mode": "guided",
             "guided": guided, "map_options": map_options, "options": options.to_dict(),
             "blender": renderer_version()}
 
@@ -167,7 +203,7 @@ class PlanRecord:
 
     @property
     def scene_digest(self) -> str:
-        return self.data["inputs_detail"]["scene_sha256"]
+        return self.data["inputs_detail"]["scene_inputs"]
 
     @property
     def scene_name(self) -> str:
@@ -242,7 +278,7 @@ def tile_inputs(record: PlanRecord, rect: Rect) -> dict:
     options = record.options
     width, height = record.plan.width, record.plan.height
     threshold = options.noise_threshold(rect.spp)
-    return {"scene_sha256": record.scene_digest, "scene_name": record.scene_name,
+    return {"scene_inputs": record.scene_digest, "scene_name": record.scene_name,
             "frame": record.data["frame"], "resolution": [width, height], "rect": rect.to_dict(),
             "window": list(render_window(rect.window, options.margin, width, height)),
             "seed": options.seed, "adaptive_threshold": threshold, "blender": record.blender}

@@ -159,6 +159,14 @@ class RenderRequest:
                                noise_threshold=self.noise_threshold)
         return self
 
+    def to_dict(self) -> dict:
+        """Everything the request asks for, as plain data (a rerun compares its digest)."""
+        return {"mode": self.mode, "options": self.options.to_dict(), "spp": self.spp,
+                "seconds": self.seconds, "noise_threshold": self.noise_threshold,
+                "guided": None if self.guided is None else self.guided.to_dict(),
+                "map_options": None if self.map_options is None else self.map_options.to_dict(),
+                "budget_mean_spp": self.budget_mean_spp, "label": self.label}
+
     @property
     def estimator_spp(self) -> float:
         """The samples per pixel the run gives its pixels at most, which sets how much bias

@@ -49,6 +49,7 @@ class RenderStats:
     warnings: list[str] = field(default_factory=list)
     cycles_sync_s: float | None = None    # Cycles' scene sync inside the renders
     denoise_guides: dict | None = None    # auto's guide prefilter: noise, noisy, prefiltered
+    non_finite_pixels: int | None = None  # infinite or NaN pixels set to 0 (core.sampling.finite_pixels)
     # xs, xsl
     plan: dict | None = None
     ideal_speedup: float | None = None

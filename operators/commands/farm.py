@@ -173,8 +173,8 @@ def _warn(scene, files) -> None:
         print(f"xsl-render: warning: scene '{scene.name}' renders with {scene.render.engine}; "
               "the farm job uses Cycles", file=sys.stderr)
     for path in files.missing:
-        print(f"xsl-render: warning: the scene reads {path}, which does not exist; the job "
-              "renders without it", file=sys.stderr)
+        print(f"xsl-render: warning: the scene reads {path}, which does not exist; the job's "
+              "tasks fail until it does", file=sys.stderr)
     for path in files.absolute_in_blend:
         print(f"xsl-render: warning: the .blend names {path} by an absolute path: a worker "
               "finds it only at that same path (File > External Data > Make Paths Relative)",

@@ -51,7 +51,8 @@ def add_arguments(parser) -> None:
                              "with its own maps (the camera rays are cast once while camera and "
                              "geometry stay still); --out names them "
                              "like Blender: its last run of # becomes the frame number "
-                             "(out/frame_####.exr), else 4 digits are added before .exr")
+                             "(out/frame_####.exr), else 4 digits are added before .exr; a rerun "
+                             "keeps the frames an earlier run of the same request finished")
     maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
     maps.add_argument("--map", metavar="FILE.exr", type=argtypes.input_file(what="director map"),
                       help="the director map, values in [0, 1] at render size")
