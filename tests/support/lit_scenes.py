@@ -9,8 +9,8 @@ eight seeds) and the rest from ``numpy.random.default_rng(seed)``:
 * fog box: a box resting on the floor, homogeneous or noise-textured; sometimes so large the
   camera stands in it;
 * fog blob: a sphere or squashed blob, floating or resting, homogeneous or noise;
-* dense cloud: a self-shadowing noise cloud (optical depth 5-50 across) lit by a sun and a
-  sky, the camera outside (issue 43's first failure);
+* dense cloud: a self-shadowing noise cloud (optical depth 8-80 across), fading out or dense
+  to its edge, lit by a sun and a sky, the camera outside (issue 43's first failure);
 * emissive volume: noise-textured Principled Volume emission or blackbody, with or without a
   lamp inside;
 * smoke grid: an OpenVDB density grid made by geometry nodes (``xmap_scenes.smoke_volume_object``);
@@ -175,13 +175,17 @@ class _Builder:
         radius = self.uniform(1.8, 3.0)
         centre = np.array([self.uniform(-1, 1), self.uniform(-1, 1), radius * 0.8 + self.uniform(0.8, 2.0)])
         self.target = centre
-        depth = self.log_uniform(5.0, 50.0)
-        material = self.medium_material("Cloud", depth / (2 * radius), noise=True, falloff=True,
+        depth = self.log_uniform(8.0, 80.0)
+        # Half the clouds fade out towards their sphere; the rest end at it, dense up to the
+        # edge (every camera ray then sees almost no transmittance: issue 43's case).
+        soft = self.chance(0.5)
+        material = self.medium_material("Cloud", depth / (2 * radius), noise=True, falloff=soft,
                                          albedo=(0.9, 1.0), anisotropy=(0.0, 0.8))
         squash = self.uniform(0.6, 0.9)
         self.kit.mesh_object("Cloud", self.kit.uv_sphere(1.0, 32, 16), material, location=tuple(centre),
                              scale=(radius, radius * self.uniform(0.8, 1.1), radius * squash))
-        self.feature(f"dense self-shadowing noise cloud, radius {radius:.1f} m, optical depth {depth:.0f} across")
+        self.feature(f"dense self-shadowing noise cloud, radius {radius:.1f} m, optical depth {depth:.0f} across, "
+                     + ("fading out" if soft else "dense to its edge"))
         self.sun(elevation=(20, 70))
         self.world_light(sky=True)
         self.lamps(int(self.rng.integers(0, 2)))
