@@ -87,15 +87,21 @@ def register_curves(tier: Tier, timed: bool, auto_key: str) -> tuple[str, str]:
 def run_tier(blend: Path, tier: Tier, size: tuple[int, int], out_dir: Path, timed: bool = False,
              repeats: int = 1) -> dict:
     """The curves of one scene for one tier (curves.json's content, also written to
-    ``out_dir``); finished runs and the reference are reused."""
+    ``out_dir``); finished runs and the reference are reused. The curves registry is left as
+    it was found (``xsl-render curves`` in the same process must not plan these)."""
     from xsl_render.addon.validation.curves_runner import CurvesJob, CurvesSettings
     from xsl_render.core.files import write_json
+    from xsl_render.core.validation.contestants import CURVES
     from xsl_render.core.validation.vdp import vdp_unavailable_reason
 
-    curves = register_curves(tier, timed, auto_source_hash())
-    settings = CurvesSettings(ceiling=tier.ceiling, resolution=tuple(size), repeats=repeats, curves=curves,
-                              vdp=vdp_unavailable_reason() is None, reference_spp=tier.reference_spp)
-    data = CurvesJob(blend, settings, out_dir).run()
+    registered = list(CURVES)
+    try:
+        curves = register_curves(tier, timed, auto_source_hash())
+        settings = CurvesSettings(ceiling=tier.ceiling, resolution=tuple(size), repeats=repeats, curves=curves,
+                                  vdp=vdp_unavailable_reason() is None, reference_spp=tier.reference_spp)
+        data = CurvesJob(blend, settings, out_dir).run()
+    finally:
+        CURVES[:] = registered
     write_json(Path(out_dir) / "curves.json", data)
     return data
 
