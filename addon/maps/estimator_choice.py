@@ -32,6 +32,11 @@ from .zbuffer import cast_camera_rays
 #: Camera rays the prediction marches: its 95th percentile needs a few hundred; each costs
 #: RUNS marches of up to 4 / rate steps per medium crossing (balls_b: 0.3 s in all).
 PREDICTION_PIXELS = 600
+#: With volume bounces, the scattering optical depth (95th percentile over the frame) above
+#: which auto keeps the scene's settings: multiple scattering is then a real part of the
+#: light, and marching overestimates every bounce's transmittance (a sun-lit cloud with 8
+#: bounces: 3.5-5x the single-scattering error; docs/light_paths.md).
+MULTIPLE_SCATTERING_DEPTH = 0.3
 #: Rays of a later frame of a range, which only asks whether the frame before's choice still
 #: holds (one or two rates, with hysteresis: ``choose_step_rate``). On street's 24 frames
 #: the measure at 200 rays stayed within 10-20 % of 600's (rate 0.25: 0.0083-0.0138 against
@@ -109,6 +114,11 @@ def _volumes(scene, options: RenderOptions, spp: float,
                                                 "modelled"), **scatter))
     predictor = light_path_predictor(scene, depsgraph, rays, geometry, media, segments, pixels,
                                      emitters, rates=CANDIDATE_RATES)
+    bounces = int(scene.cycles.volume_bounces)
+    if predictor is not None and bounces > 0 and predictor.scattering_depth() > MULTIPLE_SCATTERING_DEPTH:
+        return done(replace(kept_scene_settings(
+            f"light scatters up to {bounces} times in the media (volume bounces), where ray marching's "
+            "error grows with every bounce; auto predicts it for single scattering"), **scatter))
 
     def measure(rate) -> float:
         return 0.0 if predictor is None else predictor.error(rate).visible()

@@ -15,9 +15,8 @@ from ..scene.probe import find_lights, linked_from, output_shader, walk_shader
 from .zbuffer import _bvh, _cast, _volume_intervals
 
 #: Camera rays the light-path prediction follows (of those whose picture ray marching can
-#: change), and the most lamps it follows shadow rays to (the strongest where the media are).
+#: change).
 LIGHT_RAYS = 128
-MOST_LAMPS = 6
 
 
 def scene_emitters(scene, depsgraph, centre: np.ndarray) -> tuple[Emitters | None, str | None]:
@@ -51,9 +50,6 @@ def scene_emitters(scene, depsgraph, centre: np.ndarray) -> tuple[Emitters | Non
     reason = _unmodelled_lamp(scene)
     if reason:
         return None, reason
-    if len(local) > MOST_LAMPS:
-        reach = [float(np.mean(row[1])) / max(float(np.sum((row[0] - centre) ** 2)), 1e-6) for row in local]
-        local = [local[i] for i in np.argsort(reach)[::-1][:MOST_LAMPS]]
     groups = [0] * (len(local) + len(distant))
     background = np.zeros((2, 3))
     world = world_radiance(scene.world)

@@ -41,8 +41,9 @@ DARK_SHARE = 0.05
 #: Directions a world light is sampled in (cube corners: four up, four down).
 WORLD_DIRECTIONS = np.array([[x, y, z] for z in (1, -1) for y in (1, -1) for x in (1, -1)],
                             np.float64) / math.sqrt(3.0)
-#: A light of known strength bringing less than this share of the known lights' light to the
-#: scatter points and surfaces is left out (``Emitters.strongest``).
+#: A light of known strength bringing a point less than this share of the known lights'
+#: light there is left out at that point (``_ShadowRays``): leaving it out lowers the pixel's
+#: value, not its error, so the relative error left is the larger.
 FAINT_LIGHT = 0.02
 #: Length of a shadow ray toward a distant light (a sun, the sky), in scene units.
 DISTANT = 1e6
@@ -80,22 +81,6 @@ class Emitters:
     @property
     def count(self) -> int:
         return len(self.positions) + len(self.toward)
-
-    def strongest(self, points: np.ndarray) -> "Emitters":
-        """These lights less those of known strength that bring under ``FAINT_LIGHT`` of the
-        known lights' light to ``points`` (before shadows): leaving a light out lowers a
-        pixel's value, not its error, so the relative error left is the larger."""
-        _, _, irradiance = self.shadow_rays(points)
-        brought = luminance(irradiance.sum(axis=1).T)                      # (lights,)
-        known = self.group == 0
-        keep = ~known | (brought >= FAINT_LIGHT * brought[known].sum())
-        if keep.all():
-            return self
-        local, far = keep[:len(self.positions)], keep[len(self.positions):]
-        return Emitters(positions=self.positions[local], intensity=self.intensity[local], axes=self.axes[local],
-                        cone_cos=self.cone_cos[local], cone_smooth=self.cone_smooth[local],
-                        one_sided=self.one_sided[local], toward=self.toward[far], irradiance=self.irradiance[far],
-                        group=self.group[keep], background=self.background)
 
     def shadow_rays(self, points: np.ndarray):
         """For every light and point: (direction (L + D, n, 3), length (L + D, n), irradiance
@@ -342,7 +327,6 @@ class LightPathPredictor:
         lift = 1e-4 * np.maximum(1.0, np.abs(self.far))[:, None]
         surface = self.origins + self.directions * self.far[:, None] + normal * lift
         starts = np.concatenate([points.reshape(-1, 3), surface[self.hit]])
-        self.emitters = emitters = emitters.strongest(starts)
         self.shadow = _ShadowRays(starts, emitters, media, self.steps, cast, finest, max_steps)
         k = SCATTER_POINTS
         self._scatter_rows = slice(0, n * k)
@@ -471,6 +455,17 @@ class LightPathPredictor:
         out = np.exp(values[rows, position] * (1.0 - f[..., None]) + values[rows, upper] * f[..., None])
         return np.where(out <= _DARKEST * 1.0001, 0.0, out).reshape(t.shape + (3,))
 
+    def scattering_depth(self, q: float = 95.0) -> float:
+        """The ``q``-th percentile over the frame of the scattering optical depth the camera
+        rays cross in media marched in steps (how much multiple scattering matters there)."""
+        grid = self.grid
+        stepped = np.array([any(math.isfinite(self.steps[m]) for m in active) for active in self.camera.active], bool)
+        cells = stepped[grid.cell_piece] if len(grid.cell_piece) else np.zeros(0, bool)
+        depth = np.zeros(len(self.near))
+        np.add.at(depth, self.camera.ray[grid.cell_piece[cells]],
+                  luminance(grid.values[1][cells].T) * grid.width[grid.cell_piece[cells]])
+        return weighted_percentile(depth, self.weight, q, self.rest)
+
     # --- the error ------------------------------------------------------------------------
     def error(self, rates) -> ImageError:
         """The marched estimate's error per sampled pixel at one scene step rate for every
@@ -590,13 +585,24 @@ class _ShadowRays:
         lights, n = emitters.count, len(starts)
         direction, length, self.irradiance = emitters.shadow_rays(starts)
         self.direction = direction
-        origins = np.repeat(starts[None], lights, axis=0).reshape(-1, 3)
-        visible, segments = cast(origins, direction.reshape(-1, 3), length.reshape(-1))
-        self.visible = np.asarray(visible, bool).reshape(lights, n)
         self.shape = (lights, n)
-        near = np.zeros(lights * n)
-        self.pieces = Pieces.split(near, length.reshape(-1), segments)
-        self.grid = _Grid(self.pieces, origins, direction.reshape(-1, 3), media, steps,
+        # Only the lights that matter at a point are followed there (``FAINT_LIGHT``); a
+        # world of unknown strength always is.
+        brought = luminance(np.moveaxis(self.irradiance, -1, 0))                  # (lights, n)
+        known = (emitters.group == 0)[:, None]
+        followed = ~known | (brought >= FAINT_LIGHT * np.where(known, brought, 0.0).sum(axis=0))
+        followed &= brought > 0.0
+        rows = np.flatnonzero(followed.ravel())
+        origins = np.repeat(starts[None], lights, axis=0).reshape(-1, 3)[rows]
+        visible, segments = cast(origins, direction.reshape(-1, 3)[rows], length.reshape(-1)[rows])
+        self.visible = np.zeros(lights * n, bool)
+        self.visible[rows] = np.asarray(visible, bool)
+        self.visible = self.visible.reshape(lights, n)
+        # Pieces and depths are indexed by the full (light, point) row.
+        segments = [(rows[np.asarray(index, np.int64)], t0, t1) for index, t0, t1 in segments]
+        self.pieces = Pieces.split(np.zeros(lights * n), length.reshape(-1), segments)
+        all_origins = np.repeat(starts[None], lights, axis=0).reshape(-1, 3)
+        self.grid = _Grid(self.pieces, all_origins, direction.reshape(-1, 3), media, steps,
                           finest / CELLS_PER_STEP, MAX_SHADOW_CELLS, 1)
         depth = np.zeros((lights * n, 1))
         np.add.at(depth, self.pieces.ray[self.grid.cell_piece],
