@@ -78,7 +78,7 @@ def full_frame_prediction(bpy, scene, stride: int = 2):
     rays = cast_camera_rays(camera_model(scene, size=(W, H)), geometry)
     rows, cols = np.mgrid[0:H:stride, 0:W:stride]
     pixels = (rows * W + cols).ravel()
-    emitters, why = light_paths.scene_emitters(scene, depsgraph, np.zeros(3))
+    emitters, why = light_paths.scene_emitters(scene, depsgraph)
     assert why is None
     saved = light_paths.LIGHT_RAYS
     light_paths.LIGHT_RAYS = len(pixels)

@@ -12,8 +12,6 @@ import math
 import time
 from dataclasses import replace
 
-import numpy as np
-
 from ...core.maps.transmittance import medium_segments
 from ...core.media.ray_marching import medium_step, sample_pixels
 from ...core.sampling.render_options import RenderOptions
@@ -108,7 +106,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
     scatter = dict(scatter_sampling=methods or None, scatter_noise=noises or None, scatter_own=own or None)
     if not any(math.isfinite(medium_step(m)) for m in media):
         return done(replace(homogeneous_choice(), **scatter))
-    emitters, unmodelled = scene_emitters(scene, depsgraph, _media_centre(geometry, media))
+    emitters, unmodelled = scene_emitters(scene, depsgraph)
     if unmodelled:
         return done(replace(kept_scene_settings(f"{unmodelled}, so the light through the media cannot be "
                                                 "modelled"), **scatter))
@@ -131,14 +129,6 @@ def _volumes(scene, options: RenderOptions, spp: float,
         choice = replace(choice, remeasure=measure)
     kept = "".join(f"; {reason}" for reason in kept_carriers(media).values())
     return done(replace(choice, reason=choice.reason + kept, **scatter))
-
-
-def _media_centre(geometry, media) -> np.ndarray:
-    """The middle of the media's boxes (the origin for a world medium alone)."""
-    boxes = [np.asarray(box, np.float64) for box in geometry.volume_bounds]
-    if not boxes:
-        return np.zeros(3)
-    return 0.5 * (np.min([lo for lo, _ in boxes], axis=0) + np.max([hi for _, hi in boxes], axis=0))
 
 
 def step_carriers(media) -> dict:

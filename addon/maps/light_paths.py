@@ -19,9 +19,8 @@ from .zbuffer import _bvh, _cast, _volume_intervals
 LIGHT_RAYS = 128
 
 
-def scene_emitters(scene, depsgraph, centre: np.ndarray) -> tuple[Emitters | None, str | None]:
-    """(the scene's lights as ``Emitters``, None) or (None, why they cannot be modelled).
-    ``centre``: where the media are, to rank lamps by the light they bring there."""
+def scene_emitters(scene, depsgraph) -> tuple[Emitters | None, str | None]:
+    """(the scene's lights as ``Emitters``, None) or (None, why they cannot be modelled)."""
     import bpy
 
     if links_lights(scene):
