@@ -14,6 +14,7 @@ _registered: list = []
 def register():
     import bpy
 
+    from . import auto_volumes
     from .panel import preferences, properties, ui
 
     # Preferences first: the scene settings take their defaults from them.
@@ -25,11 +26,15 @@ def register():
         type=settings, name="XSL Render", description="Perceptual selective rendering settings")
     bpy.types.WindowManager.xsl_render_status = bpy.props.PointerProperty(type=properties.XSL_PG_status)
     _registered[:] = [preferences.XSL_AP_preferences, properties.XSL_PG_status, settings, *ui.CLASSES]
+    auto_volumes.register()
 
 
 def unregister():
     import bpy
 
+    from . import auto_volumes
+
+    auto_volumes.unregister()
     del bpy.types.WindowManager.xsl_render_status
     del bpy.types.Scene.xsl_render
     for cls in reversed(_registered):
