@@ -26,13 +26,14 @@ from __future__ import annotations
 
 import sys
 import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from ..core.checks import available_memory, process_memory
 from ..core.sampling.shot_plan import shot_of
 from .cycles.own_renders import rendering_own
 from .cycles.selective_render import apply_estimator
-from .cycles.volume_record import FrameRecord, JobRecord
+from .cycles.volume_record import FrameRecord, JobRecord, unsupported
 from .maps import shot_choice
 from .scene.animation import has_media, media_move
 
@@ -40,10 +41,6 @@ from .scene.animation import has_media, media_move
 #: Blender holds free (the kept session holds about one frame's render data, which a scene's
 #: evaluated copy bounds; a rule of thumb, not a measurement).
 MEMORY_HEADROOM = 2.0
-#: The volume settings Blender must have for auto's choice (Blender 5: ray marching per scene,
-#: a step per material and world, volume sampling).
-NEEDED_SETTINGS = (("scene", "volume_biased"), ("scene", "volume_step_rate"),
-                   ("material", "volume_step_rate"), ("world", "volume_step_size"))
 LOCK_INTERFACE = ("Auto Volumes needs Render › Performance › Lock Interface for a render started "
                   "from the interface (Blender lets a render change settings only then); this "
                   "render uses the file's own volume settings")
@@ -64,6 +61,11 @@ class _Job:
 
 
 _jobs: dict[int, _Job] = {}
+#: Scenes (their pointers) Auto Volumes renders whatever their setting says (the command
+#: line's ``render`` without --mode): ``forced``.
+_forced: dict[int, bool] = {}
+#: The last shot choice each scene (its pointer) rendered with, for what reports on a render.
+last_plans: dict[int, object] = {}
 #: (first, last) frame of each scene (its pointer) as its file was loaded or saved: farms
 #: split a range with ``-s`` / ``-e``, which set the scene's range before the render.
 _saved_ranges: dict[int, tuple[int, int]] = {}
@@ -71,28 +73,41 @@ _saved_ranges: dict[int, tuple[int, int]] = {}
 last_warning = ""
 
 
-def unsupported() -> str:
-    """Why this Blender cannot use Auto Volumes ("" where it can)."""
-    import bpy
-
-    owners = {"scene": bpy.types.Scene, "material": bpy.types.Material, "world": bpy.types.World}
-    for owner, name in NEEDED_SETTINGS:
-        cycles = owners[owner].bl_rna.properties.get("cycles")
-        if cycles is None:
-            return "Cycles is not enabled"
-        if name not in cycles.fixed_type.properties:
-            return f"this Blender's Cycles has no {owner} setting '{name}' (it needs Blender 5.0 or newer)"
-    return ""
-
-
 def enabled(scene) -> bool:
+    forced = _forced.get(scene.as_pointer())
+    if forced is not None:
+        return forced
     settings = getattr(scene, "xsl_render", None)
     return bool(getattr(settings, "auto_volumes", False))
 
 
+@contextmanager
+def forced(scene, on: bool = True):
+    """A block in which Blender's renders of ``scene`` use Auto Volumes (``on``) or not,
+    whatever its setting, and the handlers are registered (where the extension is not)."""
+    import bpy
+
+    key = scene.as_pointer()
+    registered = _on_render_pre in bpy.app.handlers.render_pre
+    if not registered:
+        register()
+    _forced[key] = on
+    try:
+        yield
+    finally:
+        _forced.pop(key, None)
+        if not registered:
+            unregister()
+
+
 def shot_range(scene) -> tuple[int, int]:
-    """The scene's frame range as its file has it (its live range for an unsaved scene)."""
-    return _saved_ranges.get(scene.as_pointer(), (scene.frame_start, scene.frame_end))
+    """The frame range a shot spans: in the interface the scene's own; in the background the
+    range its file was loaded (or last saved) with, as a farm's ``-s`` / ``-e`` may have set
+    another for the frames of one task (an unsaved scene's own range)."""
+    import bpy
+
+    live = (scene.frame_start, scene.frame_end)
+    return _saved_ranges.get(scene.as_pointer(), live) if bpy.app.background else live
 
 
 def remember_ranges() -> None:
@@ -171,6 +186,7 @@ def _apply(scene, job: _Job) -> None:
         job.tagged = True
         _tag(_union(changed, before))
     job.synced = plan.choice
+    last_plans[scene.as_pointer()] = plan
     print(f"Auto Volumes: {scene.name} frame {scene.frame_current}: {plan.describe()}", flush=True)
 
 

@@ -67,9 +67,8 @@ def rendered_layers(scene) -> list:
     return [layer for layer in scene.view_layers if layer.use] or list(scene.view_layers[:1])
 
 
-def choose_for_shot(scene, shot: tuple[int, int], choose=choose_estimator) -> ShotChoice:
-    """Auto's choice for ``shot`` (first, last frame) of ``scene``; ``choose(scene, options,
-    spp)`` makes each sampled frame's choice."""
+def choose_for_shot(scene, shot: tuple[int, int]) -> ShotChoice:
+    """Auto's choice for ``shot`` (first, last frame) of ``scene``."""
     import bpy
 
     started = time.perf_counter()
@@ -84,7 +83,7 @@ def choose_for_shot(scene, shot: tuple[int, int], choose=choose_estimator) -> Sh
                 spp = frame_spp(scene, layer)
                 options = RenderOptions(max_spp=max(1, round(spp)), estimator="auto")
                 with bpy.context.temp_override(view_layer=layer):
-                    found.append((choose(scene, options, spp), frame, layer.name, spp))
+                    found.append((choose_estimator(scene, options, spp), frame, layer.name, spp))
     finally:
         scene.frame_set(own[0], subframe=own[1])
     best = most_cautious([choice for choice, *_ in found])

@@ -36,7 +36,7 @@ def sampled_frames(shot: tuple[int, int], animated: bool, count: int = SHOT_SAMP
     start, end = shot
     if not animated or end <= start or count < 2:
         return (start,)
-    return tuple(sorted({round(start + (end - start) * i / (count - 1)) for i in range(count)}))
+    return tuple(sorted({math.floor(start + (end - start) * i / (count - 1) + 0.5) for i in range(count)}))
 
 
 def caution(choice) -> tuple:
