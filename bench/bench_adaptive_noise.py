@@ -6,9 +6,10 @@ Per scene (its own settings, Blender's F12 with no denoiser, at ``--percentage``
 size), the noise of a render is the median over pixels of |seed a - seed b| / sqrt(2),
 relative to the pixel's luminance (at least ``FLOOR``). Uniform renders at ``COUNTS`` give
 the noise-against-samples curve; an adaptive render at threshold t (Cycles' automatic
-minimum, ``--ceiling`` samples) reads its equivalent count N off that curve (log-log), and
-the script prints t * sqrt(N): the constant ``ADAPTIVE_NOISE_SCALE`` models as the same
-for every t.
+minimum, ``--ceiling`` samples) reads its equivalent count N off that curve (log-log; a
+count past the curve's last reads as its last), and the script prints t x N and N over the
+minimum samples, which ``ADAPTIVE_SAMPLES_TIMES_THRESHOLD`` and ``ADAPTIVE_MINIMUM_SHARE``
+bound from above.
 
     .venv/bin/python bench/bench_adaptive_noise.py --scenes balls_b,road --percentage 25
 """
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
 import sys
 import tempfile
 from pathlib import Path
@@ -70,14 +70,12 @@ def measure(bpy, name: str, percentage: int, ceiling: int) -> list[str]:
         curve = [(count, noise(bpy, scene, Path(folder), count)) for count in COUNTS]
         lines += [f"  {count:5d} spp  {value:.4f}  (x sqrt(spp) {value * math.sqrt(count):.3f})"
                   for count, value in curve]
-        scales = []
         for threshold in THRESHOLDS:
             value = noise(bpy, scene, Path(folder), ceiling, threshold)
             count = equivalent_count(curve, value)
-            scales.append(threshold * math.sqrt(count))
+            minimum = math.ceil(16.0 / threshold ** 0.3)          # Cycles' automatic minimum
             lines.append(f"  adaptive t={threshold:<5g} noise {value:.4f} = uniform {count:7.1f} spp; "
-                         f"t * sqrt(spp) = {scales[-1]:.3f}")
-    lines.append(f"  median t * sqrt(spp): {statistics.median(scales):.3f}")
+                         f"t x spp = {threshold * count:.2f}, spp / minimum {count / minimum:.2f}")
     return lines
 
 

@@ -17,10 +17,13 @@ SHOT_SAMPLES = 5
 #: Cycles' noise threshold where the file leaves it at 0 (automatic): 1 / samples, at least
 #: this (``Integrator::get_adaptive_sampling``).
 MIN_AUTOMATIC_THRESHOLD = 0.001
-#: The pixel noise an adaptive render leaves at noise threshold t is that of a render of
-#: (ADAPTIVE_NOISE_SCALE / t)^2 samples everywhere (capped at its samples, at least its
-#: minimum): measured in ``bench/bench_adaptive_noise.py`` (docs/auto_volumes.md).
-ADAPTIVE_NOISE_SCALE = 0.2
+#: The noise an adaptive render leaves at noise threshold t (as samples everywhere would
+#: leave it), measured on balls_b, road and statue (``bench/bench_adaptive_noise.py``,
+#: docs/auto_volumes.md): about t x samples = 1.8-4.2 where the threshold stops the pixels,
+#: and 1.2-1.6 x the minimum samples where that minimum does; the larger of the two at the
+#: cautious end (more samples: a stricter tolerance).
+ADAPTIVE_SAMPLES_TIMES_THRESHOLD = 4.2
+ADAPTIVE_MINIMUM_SHARE = 1.6
 
 
 def shot_of(frame: int, start: int, end: int) -> tuple[int, int]:
@@ -84,5 +87,5 @@ def estimator_samples(samples: int, adaptive: bool = False, threshold: float = 0
         threshold = max(MIN_AUTOMATIC_THRESHOLD, 1.0 / samples)
     if min_samples <= 0:
         min_samples = math.ceil(16.0 / threshold ** 0.3)      # Cycles' automatic minimum
-    equivalent = (ADAPTIVE_NOISE_SCALE / threshold) ** 2
-    return float(min(samples, max(min(min_samples, samples), equivalent)))
+    equivalent = max(ADAPTIVE_MINIMUM_SHARE * min_samples, ADAPTIVE_SAMPLES_TIMES_THRESHOLD / threshold)
+    return float(min(samples, equivalent))
