@@ -1,6 +1,6 @@
 """Stress: 200 consecutive F12 renders in one process, toggling Auto Volumes and changing the
 frame, the frame range and persistent data; no crash, and every setting as it was after each.
-(The suite renders 24 of them: ``tests/test_auto_volumes.py``.)
+(The suite renders 200 of a tiny fog scene: ``tests/test_auto_volumes.py``.)
 
     .venv/bin/python bench/bench_auto_volumes_stress.py [--renders 200] [--scene balls_b]
 """
