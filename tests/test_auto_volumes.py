@@ -342,6 +342,15 @@ def test_preview_shows_the_frames_choice_and_apply_writes_it_into_the_scene(blen
     assert everything(blender, scene) == before
     plan = choose_for_shot(scene, (1, 4))
     scene.xsl_render.auto_volumes = True
+    # Undoable: an UNDO operator, whose step the interface pushes after it (here by hand).
+    assert "UNDO" in blender.types.XSL_OT_apply_auto_volumes.bl_options
+    blender.ops.ed.undo_push(message="before Apply to Scene")
+    assert blender.ops.xsl.apply_auto_volumes() == {"FINISHED"}
+    blender.ops.ed.undo_push(message="Apply to Scene")
+    assert blender.context.scene.cycles.volume_step_rate != 1.0
+    assert blender.ops.ed.undo() == {"FINISHED"}
+    scene = blender.context.scene
+    assert (scene.cycles.volume_step_rate, scene.xsl_render.auto_volumes) == (1.0, True)
     assert blender.ops.xsl.apply_auto_volumes() == {"FINISHED"}
     assert scene.xsl_render.auto_volumes is False
     assert scene.cycles.volume_biased and scene.cycles.volume_step_rate == pytest.approx(plan.choice.step_rate)
@@ -349,8 +358,6 @@ def test_preview_shows_the_frames_choice_and_apply_writes_it_into_the_scene(blen
         plan.choice.medium_settings["material:smoke"])
     # Blue-Noise (round) renders only with Blender's debug options: the file keeps its pattern.
     assert scene.cycles.sampling_pattern == before["cycles"]["sampling_pattern"]
-    assert "Apply" in blender.ops.xsl.apply_auto_volumes.get_rna_type().name
-    assert "UNDO" in blender.types.XSL_OT_apply_auto_volumes.bl_options
 
 
 def test_a_render_from_the_interfaces_thread_needs_the_interface_locked(blender, addon):
