@@ -27,9 +27,10 @@ from __future__ import annotations
 import sys
 import threading
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..core.checks import available_memory, process_memory
+from ..core.sampling.sample_pattern import needs_debug_options
 from ..core.sampling.shot_plan import shot_of
 from .cycles.own_renders import rendering_own
 from .cycles.selective_render import apply_estimator
@@ -117,6 +118,32 @@ def remember_ranges() -> None:
     _saved_ranges.clear()
     for scene in bpy.data.scenes:
         _saved_ranges[scene.as_pointer()] = (scene.frame_start, scene.frame_end)
+
+
+def current_choice(scene):
+    """Auto Volumes' choice (a ``ShotChoice``) for the scene's current frame, as its render
+    would make it."""
+    return shot_choice.choose_for_shot(scene, shot_of(scene.frame_current, *shot_range(scene)))
+
+
+def apply_to_scene(scene) -> tuple[object, str]:
+    """Write the current frame's choice into the scene's own settings (for renders without
+    this extension) and turn Auto Volumes off: the file carries the choice now, and auto on
+    top of it would scale the media's own steps again. A sample pattern Cycles renders only
+    with Blender's debug options is left out (a file cannot carry them). Returns the plan
+    and what was left out ("" for nothing)."""
+    import bpy
+
+    plan = current_choice(scene)
+    choice, left_out = plan.choice, ""
+    if choice.sample_pattern is not None and needs_debug_options(choice.sample_pattern):
+        choice, left_out = replace(choice, sample_pattern=None), "the sample pattern stays the file's"
+    apply_estimator(scene, choice)
+    for datablock in (scene, scene.world, *bpy.data.materials):
+        if datablock is not None:
+            datablock.update_tag()          # add-on properties do not tag: the viewport would keep the old
+    scene.xsl_render.auto_volumes = False
+    return replace(plan, choice=choice), left_out
 
 
 def _warn(scene, message: str) -> None:

@@ -71,6 +71,19 @@ print("PANEL-AND-OPERATORS-OK")
 """
 
 
+def stock_bpy(tmp_path: Path) -> dict:
+    """The environment of a Python that sees only what a stock Blender bundles (run it with
+    ``-S -s``), its user folder (where extensions install) in ``tmp_path``."""
+    site = Path(sysconfig.get_paths()["purelib"])
+    stock = tmp_path / "stock"
+    stock.mkdir()
+    for name in STOCK_BLENDER_PACKAGES:
+        if (site / name).exists():
+            (stock / name).symlink_to(site / name)
+    return {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
+            "PYTHONPATH": str(stock), "BLENDER_USER_RESOURCES": str(tmp_path / "user")}
+
+
 def test_manifest_is_complete():
     manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
     assert manifest["schema_version"] == "1.0.0" and manifest["id"] == "xsl_render"
@@ -114,16 +127,9 @@ def test_zip_holds_the_extension_and_not_the_repository(built_zips):
 
 
 def test_linux_zip_installs_into_a_stock_bpy_and_its_panel_works(built_zips, tmp_path):
-    site = Path(sysconfig.get_paths()["purelib"])
-    stock = tmp_path / "stock"
-    stock.mkdir()
-    for name in STOCK_BLENDER_PACKAGES:
-        if (site / name).exists():
-            (stock / name).symlink_to(site / name)
     script = tmp_path / "install.py"
     script.write_text(INSTALL_SCRIPT)
-    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
-           "PYTHONPATH": str(stock), "BLENDER_USER_RESOURCES": str(tmp_path / "user")}
+    env = stock_bpy(tmp_path)
     result = subprocess.run([sys.executable, "-S", "-s", str(script), str(ROOT / "tests"),
                              str(built_zips["xsl_render-0.1.0-linux_x64.zip"])],
                             capture_output=True, text=True, env=env, timeout=600)
@@ -169,14 +175,7 @@ def test_a_blender_farm_job_renders_a_range_in_a_blender_with_the_extension_from
 
     from xsl_render.core.imageio import image_attributes
 
-    site = Path(sysconfig.get_paths()["purelib"])
-    stock = tmp_path / "stock"
-    stock.mkdir()
-    for name in STOCK_BLENDER_PACKAGES:
-        if (site / name).exists():
-            (stock / name).symlink_to(site / name)
-    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
-           "PYTHONPATH": str(stock), "BLENDER_USER_RESOURCES": str(tmp_path / "user")}
+    env = stock_bpy(tmp_path)
     (tmp_path / "shot.py").write_text(SHOT_SCRIPT)
     blend = tmp_path / "shot.blend"
     made = subprocess.run([sys.executable, "-S", "-s", str(tmp_path / "shot.py"), str(ROOT / "tests"), str(blend),
