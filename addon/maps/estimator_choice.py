@@ -12,17 +12,20 @@ import math
 import time
 from dataclasses import replace
 
+import numpy as np
+
 from ...core.maps.transmittance import medium_segments
-from ...core.media.ray_marching import MarchingPredictor, medium_step, sample_pixels
+from ...core.media.ray_marching import medium_step, sample_pixels
 from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.light_tree import auto_light_tree
 from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
-                                               fixed_choice, kept_null_scattering, per_medium_rates,
-                                               visible_bias)
+                                               fixed_choice, homogeneous_choice, kept_null_scattering,
+                                               kept_scene_settings, per_medium_rates)
 from ..scene.geometry import media_by_carrier, scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
 from ..scene.probe import camera_model, render_size
+from .light_paths import light_path_predictor, scene_emitters
 from .scatter_choice import scatter_sampling
 from .zbuffer import cast_camera_rays
 
@@ -77,17 +80,18 @@ def _volumes(scene, options: RenderOptions, spp: float,
     import bpy
 
     started = time.perf_counter()
+
+    def done(choice: EstimatorChoice) -> EstimatorChoice:
+        return replace(choice, seconds=time.perf_counter() - started)
+
     depsgraph = bpy.context.evaluated_depsgraph_get()
     geometry, media = scan_scene(scene, depsgraph)
     opaque = [m.name for m in media if not m.evaluable]
     if opaque:
-        return replace(EstimatorChoice("auto", biased=False,
-                                       reason=f"medium '{opaque[0]}' is evaluated only by Cycles, "
-                                              "so its bias cannot be predicted"),
-                       seconds=time.perf_counter() - started)
+        return done(kept_scene_settings(f"medium '{opaque[0]}' is evaluated only by Cycles, so ray "
+                                         "marching's error in it cannot be predicted"))
     if not media:
-        return replace(fixed_choice("scene", None), estimator="auto", reason="no participating media",
-                       seconds=time.perf_counter() - started)
+        return done(replace(fixed_choice("scene", None), estimator="auto", reason="no participating media"))
     width, height = options.resolution or render_size(scene)
     count = PREDICTION_PIXELS if previous is None else FOLLOWING_FRAME_PIXELS
     scale = min(1.0, math.sqrt(count / (width * height)))
@@ -95,25 +99,35 @@ def _volumes(scene, options: RenderOptions, spp: float,
     rays = cast_camera_rays(camera, geometry)
     segments = [medium_segments(rays, m) for m in media]
     pixels = sample_pixels(rays.shape, count)
-    predictor = MarchingPredictor(rays, media, segments, pixels)
     methods, noises, own = scatter_sampling(scene, depsgraph, rays, media, segments, pixels)
-    if not predictor.heterogeneous:
-        choice = EstimatorChoice("auto", biased=True, step_rate=None, predicted_bias=0.0,
-                                 reason="homogeneous media only: ray marching takes each in one "
-                                        "exact step")
-    else:
-        def measure(rate) -> float:
-            error = predictor.error(rate)
-            return visible_bias(error.luminance(error.transmittance), error.luminance(error.bias))
+    scatter = dict(scatter_sampling=methods or None, scatter_noise=noises or None, scatter_own=own or None)
+    if not any(math.isfinite(medium_step(m)) for m in media):
+        return done(replace(homogeneous_choice(), **scatter))
+    emitters, unmodelled = scene_emitters(scene, depsgraph, _media_centre(geometry, media))
+    if unmodelled:
+        return done(replace(kept_scene_settings(f"{unmodelled}, so the light through the media cannot be "
+                                                "modelled"), **scatter))
+    predictor = light_path_predictor(scene, depsgraph, rays, geometry, media, segments, pixels,
+                                     emitters, rates=CANDIDATE_RATES)
 
-        choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
-        choice = _per_medium(choice, media, measure, options.step_rate, previous)
-        if previous is None:
-            # Kept for a time-budgeted still's settle, which may need finer rates or the
-            # media's steps at another scene rate (``settled_for``).
-            choice = replace(choice, remeasure=measure)
-    return replace(choice, scatter_sampling=methods or None, scatter_noise=noises or None,
-                   scatter_own=own or None, seconds=time.perf_counter() - started)
+    def measure(rate) -> float:
+        return 0.0 if predictor is None else predictor.error(rate).visible()
+
+    choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
+    choice = _per_medium(choice, media, measure, options.step_rate, previous)
+    if previous is None:
+        # Kept for a time-budgeted still's settle, which may need finer rates or the
+        # media's steps at another scene rate (``settled_for``).
+        choice = replace(choice, remeasure=measure)
+    return done(replace(choice, **scatter))
+
+
+def _media_centre(geometry, media) -> np.ndarray:
+    """The middle of the media's boxes (the origin for a world medium alone)."""
+    boxes = [np.asarray(box, np.float64) for box in geometry.volume_bounds]
+    if not boxes:
+        return np.zeros(3)
+    return 0.5 * (np.min([lo for lo, _ in boxes], axis=0) + np.max([hi for _, hi in boxes], axis=0))
 
 
 def step_carriers(media) -> dict:

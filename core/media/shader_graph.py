@@ -123,7 +123,8 @@ class GraphEvaluator:
     # --- closures -------------------------------------------------------------------
     def extinction(self, part: str = "extinction") -> np.ndarray:
         """Extinction coefficient (N, 3) at the context's points; with ``part`` "scattering",
-        only its scattering part (what in-scatters light; absorption left out)."""
+        only its scattering part (what in-scatters light; absorption left out); with
+        "emission", the light the medium emits per unit length instead."""
         n = len(self.context.points)
         if self.graph.root is None:
             return np.zeros((n, 3), np.float32)
@@ -147,6 +148,8 @@ class GraphEvaluator:
                 if isinstance(child, Link):
                     out = out + self._closure(child, weight * w, part)
             return out
+        if part == "emission":
+            return closure_emission_field(self, node, weight)
         if node.type in NON_EXTINCTION_CLOSURES:
             return 0.0
         if node.type not in VOLUME_CLOSURES:
@@ -187,6 +190,38 @@ def closure_extinction_field(ev: GraphEvaluator, node: Node, weight, part: str =
     absorption = np.maximum(1.0 - color, 0.0) * np.maximum(1.0 - absorption_color, 0.0)
     extinction = density[..., None] * (color if part == "scattering" else color + absorption)
     return np.where((density > CLOSURE_WEIGHT_CUTOFF)[..., None], extinction, 0.0)
+
+
+#: Cycles' blackbody radiance per T^4 (Stefan-Boltzmann over pi, in its units).
+_BLACKBODY_SIGMA = 5.670373e-8 * 1e-6 / np.pi
+
+
+def closure_emission_field(ev: GraphEvaluator, node: Node, weight) -> np.ndarray:
+    """The emission (N, 3) one closure node adds inside a volume, as Cycles' SVM computes it:
+    an Emission node's colour times strength, a Volume Coefficients node's emission
+    coefficients, and a Principled Volume's emission colour times strength plus its
+    blackbody (Stefan-Boltzmann radiance mixed by its intensity, tinted). The blackbody's
+    hue is left out (grey): what this feeds compares an estimate with the truth, both of
+    the same colour. Density does not scale emission."""
+    weight = np.asarray(weight, dtype=np.float32)[..., None]
+    if node.type == "EMISSION":
+        return weight * ev.input(node, "Color", (1.0, 1.0, 1.0)) * ev.input(node, "Strength", 1.0)[..., None]
+    if node.type == "VOLUME_COEFFICIENTS":
+        return weight * ev.input(node, "Emission Coefficients")
+    if node.type != "PRINCIPLED_VOLUME":
+        return np.zeros((1, 3), np.float32)
+    strength = np.maximum(np.asarray(ev.input(node, "Emission Strength", 0.0)), 0.0)[..., None]
+    out = strength * ev.input(node, "Emission Color", (1.0, 1.0, 1.0))
+    blackbody = np.maximum(np.asarray(ev.input(node, "Blackbody Intensity", 0.0)), 0.0)
+    if np.any(blackbody > 0.0):
+        temperature = np.asarray(ev.input(node, "Temperature", 1000.0), np.float64)
+        grid = ev.context.grid(node.inputs.get("Temperature Attribute"))
+        if grid is not None:
+            temperature = temperature * np.maximum(grid if grid.ndim == 1 else grid.mean(axis=1), 0.0)
+        t4 = np.maximum(temperature, 0.0) ** 4
+        intensity = _BLACKBODY_SIGMA * ((1.0 - blackbody) + blackbody * t4) * (temperature > 0.0)
+        out = out + (intensity * (blackbody > 0.0))[..., None] * ev.input(node, "Blackbody Tint", (1.0, 1.0, 1.0))
+    return weight * out
 
 
 def evaluate_extinction(graph: ShaderGraph, context: NodeContext, part: str = "extinction") -> np.ndarray:

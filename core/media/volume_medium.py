@@ -76,6 +76,16 @@ class VolumeMedium:
             extinction = extinction * self.region.contains(points)[:, None]
         return extinction
 
+    def coefficients(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(extinction, scattering, emission), each (N, 3), at world-space points: one walk of
+        the shader graph for all three (its textures evaluated once)."""
+        evaluator = GraphEvaluator(self.graph, self.context(points))
+        scale = self.density_scale
+        if self.region is not None:
+            scale = scale * self.region.contains(points)[:, None]
+        return tuple(np.nan_to_num(evaluator.extinction(part), nan=0.0, posinf=1e30, neginf=0.0) * scale
+                     for part in ("extinction", "scattering", "emission"))
+
     def describe(self) -> dict:
         constant = self.constant_extinction() if self.evaluable else None
         return {"key": self.key, "name": self.name, "kind": self.kind, "material": self.material,

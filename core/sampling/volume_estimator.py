@@ -283,6 +283,21 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
                           f"coarser, within {limit:.2%} still ({measure:.2%})")
 
 
+def kept_scene_settings(why: str) -> EstimatorChoice:
+    """Auto's guard: the scene's own volume settings, where auto cannot tell what ray
+    marching would do to the picture (``why`` says what it cannot tell)."""
+    return EstimatorChoice("auto", biased=None, reason=f"kept the scene's volume settings: {why}")
+
+
+def homogeneous_choice() -> EstimatorChoice:
+    """Homogeneous media only: both estimators are exact there (ray marching takes each
+    piece in one step), so only their noise differs, and ray marching's is not predicted to
+    be lower (its distance sampling passes thin media by; null scattering samples inside
+    them). Blender 5 builds no octree for such media, so there is nothing to save."""
+    return kept_scene_settings("homogeneous media only: both estimators are unbiased there and "
+                               "ray marching is not predicted to be less noisy")
+
+
 def kept_null_scattering(previous: EstimatorChoice | None, spp: float) -> EstimatorChoice | None:
     """A frame range that chose null scattering keeps it, without predicting again (None: no
     such frame before, predict as usual).
