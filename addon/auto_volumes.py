@@ -70,7 +70,7 @@ last_plans: dict[int, object] = {}
 #: (first, last) frame of each scene (its pointer) as its file was loaded or saved: farms
 #: split a range with ``-s`` / ``-e``, which set the scene's range before the render.
 _saved_ranges: dict[int, tuple[int, int]] = {}
-#: The last warning, for the panel.
+#: The last warning printed (for scripts and tests that look at it).
 last_warning = ""
 
 

@@ -23,6 +23,15 @@ class BlenderStill:
     seconds: float
     plan: object | None          # Auto Volumes' ShotChoice, None: the file's own settings
 
+    def to_dict(self) -> dict:
+        """The --stats JSON of ``xsl-render render`` without --mode."""
+        plan = self.plan
+        return {"mode": "blender", "frame": self.frame, "resolution": list(self.resolution),
+                "samples": self.samples, "wall_s": self.seconds,
+                "auto_volumes": None if plan is None else {
+                    "described": plan.describe(), "shot": list(plan.shot), "frames": list(plan.frames),
+                    "estimator": plan.choice.to_dict()}}
+
     def describe(self) -> str:
         choice = "the file's own volume settings" if self.plan is None else f"Auto Volumes: {self.plan.describe()}"
         width, height = self.resolution

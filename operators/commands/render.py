@@ -3,10 +3,10 @@ samples, denoiser, compositor and outputs) with Auto Volumes (``--estimator scen
 ``addon.blender_render``. With ``--mode``, the paper's renders and the baselines:
 ``--mode gold|xs|xsl|uniform|adaptive --max-spp N`` and ``--mode guided --time-budget SECONDS``.
 
-Writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel; the PNG's
-grey level is spp / max_spp, or spp / the most any pixel got for guided without a ceiling)
-and, with --stats, the run's statistics as JSON. A ``#`` run in
-FILE's name becomes the frame number; ``--frames START-END`` renders an animation
+With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per
+pixel; the PNG's grey level is spp / max_spp, or spp / the most any pixel got for guided
+without a ceiling) and, with --stats, the run's statistics as JSON. A ``#`` run in FILE's
+name becomes the frame number; ``--frames START-END`` renders an animation
 (``render_animation.py``).
 """
 from __future__ import annotations
@@ -35,9 +35,9 @@ MODES = ("gold", "xs", "xsl", "uniform", "adaptive", "guided")
 def add_arguments(parser) -> None:
     add_scene_arguments(parser)
     parser.add_argument("--mode", choices=MODES, default=None,
-                        help="without it: the file as Blender renders it (its samples, denoiser, "
-                             "compositor and outputs) with Auto Volumes; gold: max-spp everywhere; xs/xsl: samples from the director map; "
-                             "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
+                        help="without it: the file as Blender renders it (its samples, seed, "
+                             "denoiser, compositor and outputs) with Auto Volumes; gold: max-spp "
+                             "everywhere; xs/xsl: samples from the director map; uniform: equal samples (or time) everywhere; adaptive: Cycles' "
                              "adaptive sampling at equal time; guided: within --time-budget, "
                              "the samples spread evenly (or by --importance, or by a pilot's "
                              "error scores with --guided-exponent > 0)")
@@ -168,11 +168,7 @@ def _run_as_blender(args) -> int:
             separate_files(declared_files(args)[0], files(args, out)[1])
         still = render_still(scene, out, auto=args.estimator != "scene")
     if args.stats:
-        write_json(args.stats, {"mode": "blender", "frame": still.frame, "resolution": list(still.resolution),
-                                "samples": still.samples, "wall_s": still.seconds,
-                                "auto_volumes": None if still.plan is None else {
-                                    "described": still.plan.describe(), "shot": list(still.plan.shot),
-                                    "frames": list(still.plan.frames), "estimator": still.plan.choice.to_dict()}})
+        write_json(args.stats, still.to_dict())
     print(f"blender: {still.describe()} -> {out}")
     return 0
 
