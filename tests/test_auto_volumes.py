@@ -381,3 +381,26 @@ def test_a_render_from_the_interfaces_thread_needs_the_interface_locked(blender,
         thread.join()
     assert started == [False, True]
     assert "Lock Interface" in auto_volumes.last_warning
+
+
+def test_the_command_line_renders_the_file_as_blender_does_with_auto_volumes(blender, addon, cli, tmp_path):
+    import json
+
+    scene = media_scene(blender, tmp_path, camera_moves=False)
+    scene.render.image_settings.color_depth = "32"
+    blend = tmp_path / "shot.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(blend))
+    scene.xsl_render.auto_volumes = True
+    f12_image = f12(blender, scene, tmp_path / "f12")
+    result = cli("render", blend, "--out", tmp_path / "cli.exr", "--stats", tmp_path / "cli.json")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1].startswith("blender: frame 1, 32x18, 4 spp as the file sets")
+    np.testing.assert_array_equal(read_image(tmp_path / "cli.exr"), f12_image)
+    stats = json.loads((tmp_path / "cli.json").read_text())
+    assert stats["auto_volumes"]["estimator"]["biased"] and stats["samples"] == SPP
+    plain = cli("render", blend, "--out", tmp_path / "plain.exr", "--estimator", "scene")
+    assert plain.returncode == 0 and "the file's own volume settings" in plain.stdout
+    assert "Note" not in image_attributes(tmp_path / "plain.exr")
+    refused = cli("render", blend, "--out", tmp_path / "x.exr", "--spp", "4")
+    assert refused.returncode == 2 and "--spp needs --mode" in refused.stderr
+    assert not (tmp_path / "x.exr").exists()
