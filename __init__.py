@@ -56,3 +56,14 @@ def _cancelled() -> int:
 
     print("xsl-render: cancelled", file=sys.stderr)
     return 130
+
+
+def render_chunk(argv=None) -> int:
+    """A farm task of a plain Blender job (``core/farm/blender_job.py``), inside the worker's
+    Blender: ``blender -b scene.blend --python xsl_render_chunk.py -- --scene-name S --frames
+    1-8 --output DIR`` renders the frames as Blender does, with Auto Volumes."""
+    import sys
+
+    from .addon.farm.blender_chunk import render_chunk as run
+
+    return run(sys.argv[sys.argv.index("--") + 1:] if argv is None else argv)

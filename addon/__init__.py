@@ -14,7 +14,8 @@ _registered: list = []
 def register():
     import bpy
 
-    from .panel import preferences, properties, ui
+    from . import auto_volumes
+    from .panel import auto_volumes_ui, preferences, properties, ui
 
     # Preferences first: the scene settings take their defaults from them.
     bpy.utils.register_class(preferences.XSL_AP_preferences)
@@ -25,11 +26,18 @@ def register():
         type=settings, name="XSL Render", description="Perceptual selective rendering settings")
     bpy.types.WindowManager.xsl_render_status = bpy.props.PointerProperty(type=properties.XSL_PG_status)
     _registered[:] = [preferences.XSL_AP_preferences, properties.XSL_PG_status, settings, *ui.CLASSES]
+    auto_volumes.register()
+    auto_volumes_ui.register()
 
 
 def unregister():
     import bpy
 
+    from . import auto_volumes
+    from .panel import auto_volumes_ui
+
+    auto_volumes_ui.unregister()
+    auto_volumes.unregister()
     del bpy.types.WindowManager.xsl_render_status
     del bpy.types.Scene.xsl_render
     for cls in reversed(_registered):

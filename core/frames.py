@@ -88,6 +88,22 @@ def _items(text: str) -> list[tuple[str, range]]:
     return items
 
 
+def frame_runs(frames) -> list[range]:
+    """``frames`` (ascending) as runs of evenly spaced frames, each what one ``START-END:STEP``
+    animation renders, each run as long as the frames keep its spacing: (1, 2, 3, 5, 7, 8)
+    -> 1-3, 5-7:2, 8."""
+    runs: list[range] = []
+    for frame in frames:
+        last = runs[-1] if runs else None
+        if last is not None and len(last) == 1:
+            runs[-1] = range(last.start, frame + 1, frame - last.start)
+        elif last is not None and frame - last[-1] == last.step:
+            runs[-1] = range(last.start, frame + 1, last.step)
+        else:
+            runs.append(range(frame, frame + 1))
+    return runs
+
+
 def has_frame_marker(pattern: str) -> bool:
     """True when the file name (not a folder) of ``pattern`` holds a ``#``."""
     return "#" in _split(pattern)[1]

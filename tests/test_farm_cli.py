@@ -163,7 +163,8 @@ def test_a_chunk_of_frames_is_one_process_per_task_and_equals_render(cli, blende
     of one `xsl-render render --frames 1-3`."""
     scene = moving_camera(blender, ROAD, tmp_path / "road_moving.blend")
     bundle = tmp_path / "bundle"
-    result = cli("farm", scene, "--bundle", bundle, "--frames", "1-3", "--tasks-per-frame", "2", *CHUNK)
+    result = cli("farm", scene, "--bundle", bundle, "--frames", "1-3", "--mode", "xsl", "--tasks-per-frame", "2",
+                 *CHUNK)
     assert result.returncode == 0 and "up to 8 frame(s) a task" in result.stdout, result.stderr
     check = openjd("check", bundle / "template.yaml")
     assert check.returncode == 0 and "passes validation" in check.stdout, check.stdout + check.stderr
@@ -367,3 +368,29 @@ def test_bad_guided_options_exit_2_before_any_work(cli, tmp_path, command, args,
     assert result.returncode == 2
     assert message in one_line_error(result)
     assert not (tmp_path / "bundle").exists()
+
+
+def test_an_animations_default_job_is_blenders_own_with_auto_volumes_and_a_stills_is_xsl(cli, tmp_path):
+    from xsl_render.core.farm.blender_job import TASK_SCRIPT
+
+    result = cli("farm", ROAD, "--bundle", tmp_path / "animation", "--frames", "1-9:2", "--frames-per-task", "3")
+    assert result.returncode == 0 and "a Blender job, frames 1-9:2" in result.stdout, result.stderr
+    template = yaml.safe_load((tmp_path / "animation" / "template.yaml").read_text())
+    step, = template["steps"]
+    assert step["script"]["actions"]["onRun"]["command"] == "{{Param.BlenderExecutable}}"
+    assert step["script"]["embeddedFiles"][0]["data"] == TASK_SCRIPT
+    values = openjd_values(yaml.safe_load((tmp_path / "animation" / "parameter_values.yaml").read_text()))
+    assert values["AutoVolumes"] == "true" and values["BlenderExecutable"] == "blender"
+    assert values["FramesPerTask"] == 3 and values["Frames"] == "1-9:2"
+    check = openjd("check", tmp_path / "animation" / "template.yaml")
+    assert check.returncode == 0, check.stdout + check.stderr
+    # The options of the paper's jobs are refused by a Blender job, and the other way round.
+    for args, flag in ((["--max-spp", "8"], "--max-spp"), (["--resolution", "64x36"], "--resolution"),
+                       (["--worker-setup", "pip"], "--worker-setup")):
+        refused = cli("farm", ROAD, "--bundle", tmp_path / "refused", "--frames", "1-3", *args)
+        assert refused.returncode == 2 and f"{flag} is for --mode xs, xsl or guided" in one_line_error(refused)
+    refused = cli("farm", ROAD, "--bundle", tmp_path / "refused", "--frames", "1", "--blender", "b")
+    assert refused.returncode == 2 and "--blender is for --mode blender" in one_line_error(refused)
+    assert not (tmp_path / "refused").exists()
+    still = cli("farm", ROAD, "--bundle", tmp_path / "still", "--frames", "7", "--max-spp", "4")
+    assert still.returncode == 0 and "xsl up to 4 spp" in still.stdout, still.stderr

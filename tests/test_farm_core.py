@@ -403,3 +403,35 @@ def test_a_guided_frame_is_finished_only_as_a_whole_set_for_its_inputs(tmp_path,
         ["frame_0007.exr", "frame_0007.json", "frame_0007_spp.exr", "frame_0007_spp.png"]
     files.image.write_bytes(files.image.read_bytes()[:-16])                      # damaged
     assert valid_frame_outputs(files, json_digest(inputs)) is None
+
+
+def test_a_chunk_renders_as_runs_of_evenly_spaced_frames():
+    from xsl_render.core.frames import frame_runs
+
+    runs = frame_runs((1, 2, 3, 5, 7, 8, 20))
+    assert [(r.start, r[-1], r.step) for r in runs] == [(1, 3, 1), (5, 7, 2), (8, 20, 12)]
+    assert [list(r) for r in frame_runs((9, 11, 15, 16, 17))] == [[9, 11], [15, 16, 17]]
+    assert frame_runs(()) == [] and [list(r) for r in frame_runs((4,))] == [[4]]
+
+
+def test_a_blender_jobs_task_runs_the_worker_blender_on_its_chunk_with_auto_volumes(tmp_path):
+    from xsl_render.core.errors import InputError
+    from xsl_render.core.farm.blender_job import BlenderJob, blender_job_template, blender_parameter_values
+
+    job = BlenderJob(scene=tmp_path / "shot.blend", scene_name="Shot", frames="1-250", output="output",
+                     device="GPU", frames_per_task=10)
+    template = blender_job_template(job)
+    step, = template["steps"]
+    action = step["script"]["actions"]["onRun"]
+    assert action["args"][:4] == ["-b", "{{Param.SceneFile}}", "--python", "{{Task.File.Render}}"]
+    assert "{{Task.Param.Frame}}" in action["args"] and "{{Param.AutoVolumes}}" in action["args"]
+    assert action["timeout"] == 10 * 12 * 3600 and step["hostRequirements"]
+    assert step["parameterSpace"]["taskParameterDefinitions"][0]["type"] == "CHUNK[INT]"
+    values = {v["name"]: v["value"] for v in blender_parameter_values(job)["parameterValues"]}
+    assert values == {"SceneFile": str(tmp_path / "shot.blend"), "SceneName": "Shot", "Frames": "1-250",
+                      "AutoVolumes": "true", "FramesPerTask": 10, "Device": "GPU",
+                      "BlenderExecutable": "blender"}                  # OutputDir: the default
+    assert not any("value" in p for p in template["parameterDefinitions"])
+    for bad in ({"frames": "9-1"}, {"frames_per_task": 0}, {"device": "TPU"}, {"executable": " "}):
+        with pytest.raises(InputError):
+            BlenderJob(**{**job.__dict__, **bad}).check()

@@ -151,7 +151,7 @@ def test_asset_references_list_the_vdb_sequence_udim_tiles_and_library(cli, blen
     folder = tmp_path / "shot $(touch pwned) 'q'"
     scene = fog_scene_with_files(blender, folder)
     bundle = tmp_path / "bundle"
-    result = cli("farm", scene, "--bundle", bundle, "--frames", "1-3,8", "--resolution", "32x18",
+    result = cli("farm", scene, "--bundle", bundle, "--frames", "1-3,8", "--mode", "xsl", "--resolution", "32x18",
                  "--max-spp", "2", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     inputs = yaml.safe_load((bundle / "asset_references.yaml").read_text())["assetReferences"]["inputs"]

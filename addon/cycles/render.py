@@ -17,6 +17,7 @@ import OpenImageIO as oiio
 
 from ...core.errors import InputError
 from .device import honour_scene_device
+from .own_renders import own_render
 
 #: Our pass name -> (view-layer flag enabling it, its name in the EXR, channels).
 PASSES = {
@@ -66,7 +67,8 @@ def render_passes(scene, passes: tuple[str, ...] = ("Combined",), view_layer=Non
     folder = Path(tempfile.mkdtemp(prefix="xsl-render-"))
     try:
         scene.render.filepath = str(folder / "frame")
-        result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=layer.name)
+        with own_render():
+            result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=layer.name)
         if "FINISHED" not in result:
             raise RuntimeError(f"Cycles did not finish the render ({result})")
         files = sorted(folder.glob("frame*.exr"))

@@ -46,6 +46,7 @@ from ..scene.probe import render_size
 from ..scene.shader_export import has_volume
 from ..scene.state import (forget_session_counts, let_session_go, note_session_count, scene_changes,
                            session_largest_count)
+from .own_renders import own_render
 from .render import ensure_cycles, header_seconds, passes_from_channels, read_exr_parts
 
 _SAMPLE_STATUS = re.compile(r"Sample (\d+)/(\d+)")
@@ -316,7 +317,8 @@ class CyclesWindowRenderer:
         # (Before the render: Cycles may have taken the count even where the render fails.)
         note_session_count(scene, samples)
         try:
-            result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
+            with own_render():
+                result = bpy.ops.render.render(write_still=True, scene=scene.name, layer=self.layer.name)
         except BaseException:
             _synced_volumes.pop(scene.as_pointer(), None)
             raise

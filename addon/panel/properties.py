@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import bpy
 
-from ...core.panel.settings import SETTINGS, Setting
+from ...core.panel.settings import AUTO_VOLUMES, SETTINGS, Setting
 
 
 def path_options() -> set:
@@ -21,18 +21,6 @@ def path_options() -> set:
     except TypeError:
         return set()
     return {"PATH_SUPPORTS_BLEND_RELATIVE"}
-
-
-_SCENE_ONLY = {
-    "use_animation": bpy.props.BoolProperty(
-        name="Animation", default=False,
-        description="Render the scene's frame range (start to end, by its step), each frame with "
-                    "its own maps; the camera rays are reused while camera and geometry stay still"),
-    "filepath": bpy.props.StringProperty(
-        name="Output", subtype="FILE_PATH", default="", options=path_options(),
-        description="Numbered EXR files for animations (frame_####.exr: the last # run becomes the "
-                    "frame number); empty: the scene's output path"),
-}
 
 
 def blender_property(setting: Setting, default=None):
@@ -49,6 +37,19 @@ def blender_property(setting: Setting, default=None):
         limits = {key: int(val) for key, val in limits.items()}
         return bpy.props.IntProperty(default=int(value), **limits, **common)
     return bpy.props.FloatProperty(default=float(value), precision=2, step=5, **limits, **common)
+
+
+_SCENE_ONLY = {
+    AUTO_VOLUMES.name: blender_property(AUTO_VOLUMES),
+    "use_animation": bpy.props.BoolProperty(
+        name="Animation", default=False,
+        description="Render the scene's frame range (start to end, by its step), each frame with "
+                    "its own maps; the camera rays are reused while camera and geometry stay still"),
+    "filepath": bpy.props.StringProperty(
+        name="Output", subtype="FILE_PATH", default="", options=path_options(),
+        description="Numbered EXR files for animations (frame_####.exr: the last # run becomes the "
+                    "frame number); empty: the scene's output path"),
+}
 
 
 def settings_annotations(defaults: dict | None = None) -> dict:

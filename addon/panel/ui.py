@@ -13,6 +13,7 @@ import textwrap
 import bpy
 
 from ...core.panel.settings import PRESETS, uses_budget
+from .auto_volumes_ui import draw_preview, draw_switch
 
 
 class XSL_MT_presets(bpy.types.Menu):
@@ -56,6 +57,9 @@ class RENDER_PT_xsl_render(_XSLPanel, bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         layout.use_property_decorate = False
+        draw_switch(layout, context.scene)
+        draw_preview(layout, context.scene)
+        layout.separator()
         settings = context.scene.xsl_render
         layout.prop(settings, "sampler", expand=True)
         budget = uses_budget(settings)

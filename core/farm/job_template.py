@@ -70,7 +70,7 @@ def _action(job: FarmJob, *args: str) -> dict:
                       "timeout": job.timeout, "cancelation": cancelation()}}
 
 
-def _frame_space(**more) -> dict:
+def frame_space(**more) -> dict:
     """Chunks of ``FramesPerTask`` frames of the job's frames, times the INT ranges ``more``."""
     definitions = [{"name": "Frame", "type": "CHUNK[INT]", "range": "{{Param.Frames}}",
                     "chunks": {"defaultTaskCount": "{{Param.FramesPerTask}}",
@@ -110,23 +110,23 @@ def job_template(job: FarmJob) -> dict:
                     "error (xsl-render render --mode guided).", [
                         _step(job, "Render", "Each task renders a chunk of frames in one Blender process, "
                               "within the time budget per frame.",
-                              _frame_space(), "guided", "{{Param.SceneFile}}", *frame,
+                              frame_space(), "guided", "{{Param.SceneFile}}", *frame,
                               *task_arguments(parameters), renders=True)])
     groups = "{{Param.TasksPerFrame}}"
     return _job(job, parameters, "xsl-render {{Param.SceneName}} frames {{Param.Frames}}",
                 "Perceptual selective rendering of participating media (Sundstedt et al. 2007) "
                 "with Blender Cycles: director maps, tile renders, composite.", [
                     _step(job, "Maps", "Director maps and the tile plan of each frame of a chunk.",
-                          _frame_space(), "maps", "{{Param.SceneFile}}", *frame, *task_arguments(parameters),
+                          frame_space(), "maps", "{{Param.SceneFile}}", *frame, *task_arguments(parameters),
                           renders=True),
                     _step(job, "Tiles", "Each task renders its share of the rectangles of each frame "
                           "of a chunk, in one Cycles session.",
-                          {**_frame_space(Group=f"1-{groups}"), "combination": "Frame * Group"},
+                          {**frame_space(Group=f"1-{groups}"), "combination": "Frame * Group"},
                           "tiles", "{{Param.SceneFile}}", *frame, "--group", "{{Task.Param.Group}}",
                           "--groups", groups, "--device", "{{Param.Device}}", renders=True,
                           after=("Maps",)),
                     _step(job, "Composite", "The final image and samples-per-pixel image of each "
-                          "frame of a chunk.", _frame_space(), "composite", *frame, "--groups", groups,
+                          "frame of a chunk.", frame_space(), "composite", *frame, "--groups", groups,
                           renders=False, after=("Maps", "Tiles"))])
 
 
@@ -137,8 +137,12 @@ def parameter_values(job: FarmJob) -> dict:
     (by Deadline Cloud and ``openjd`` alike), where a relative *value* would be resolved
     against whatever folder the job is submitted or run from.
     """
-    return {"parameterValues": [{"name": p["name"], "value": p["value"]}
-                                for p in checked_parameters(job)
+    return values_of(checked_parameters(job))
+
+
+def values_of(parameters: list[dict]) -> dict:
+    """``parameter_values.yaml`` of parameters with their ``value`` (see ``parameter_values``)."""
+    return {"parameterValues": [{"name": p["name"], "value": p["value"]} for p in parameters
                                 if not (p["type"] == "PATH" and not Path(p["value"]).is_absolute())]}
 
 

@@ -119,6 +119,14 @@ SETTINGS: tuple[Setting, ...] = (
             True),
 )
 SETTING_NAMES = tuple(setting.name for setting in SETTINGS)
+#: A scene's own switch, saved with the file (not a panel default: a file renders as its
+#: artist set it until they turn it on).
+AUTO_VOLUMES = Setting(
+    "auto_volumes", "bool", "Auto Volumes",
+    "Render fog, smoke and clouds faster at the same look: every final render of this scene "
+    "(F12, animations, command line and farm renders with this extension) picks how Cycles "
+    "steps through each volume for that shot, and your own settings come back afterwards",
+    False)
 
 
 def builtin_defaults() -> dict:

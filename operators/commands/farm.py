@@ -12,11 +12,13 @@ exists and is not ours is refused.
 """
 from __future__ import annotations
 
+import argparse
 import shlex
 import sys
 from pathlib import Path
 
 from ...core.errors import InputError
+from ...core.farm.blender_job import BLENDER
 from ...core.farm.farm_job import DEFAULT_FRAMES_PER_TASK, MAX_FRAMES_PER_TASK
 from ...core.farm.worker_environment import WorkerSetup
 from ...core.farm.worker_setup import SETUPS
@@ -45,9 +47,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-spp", type=argtypes.SAMPLES,
                         help="samples per pixel where the map is 1 (default: the scene's Cycles "
                              "samples); guided: an optional per-pixel ceiling (default none)")
-    parser.add_argument("--mode", choices=("xs", "xsl", "guided"), default="xsl",
-                        help="director map that plans the tiles (default xsl), or guided: each "
-                             "frame rendered within --time-budget by one task")
+    parser.add_argument("--mode", choices=("blender", "xs", "xsl", "guided"), default=None,
+                        help="blender (the default for an animation): Blender renders the file as "
+                             "it is set up, with Auto Volumes, a chunk of frames a task; xs, xsl "
+                             "(a still's default): the director map that plans the tiles; guided: "
+                             "each frame rendered within --time-budget by one task")
+    parser.add_argument("--blender", metavar="PATH",
+                        help=f"--mode blender: the Blender command on the farm's machines, with the "
+                             f"xsl_render extension installed (default {BLENDER})")
+    parser.add_argument("--auto-volumes", action=argparse.BooleanOptionalAction, default=True,
+                        help="--mode blender: render with Auto Volumes (default on)")
     parser.add_argument("--tasks-per-frame", type=int, default=None,
                         help="xs, xsl: tile tasks per frame, sharing its rectangles at about equal "
                              f"cost (default {DEFAULT_TASKS_PER_FRAME})")
@@ -102,6 +111,32 @@ def tile_options(args, max_spp: int, resolution):
         resolution=resolution).check()
 
 
+#: Options of the xs, xsl and guided jobs, refused by a Blender job (the file's own settings).
+_TILE_OR_GUIDED = ("max_spp", "tasks_per_frame", "time_budget", "resolution", "executable", "worker_package")
+
+
+def _mode(args, frames: str | None) -> str | None:
+    """--mode, else blender for a job of several frames and xsl for one (None: the frames are
+    the scene's range, not known before it is opened); InputError for an option of the modes
+    a Blender job does not take, or the other way round."""
+    from ...core.frames import parse_frame_list
+
+    mode = args.mode
+    if mode is None and frames is not None:
+        mode = "blender" if len(parse_frame_list(frames)) > 1 else "xsl"
+    if mode == "blender":
+        for name in _TILE_OR_GUIDED:
+            if getattr(args, name, None) is not None:
+                raise InputError(f"--{name.replace('_', '-')} is for --mode xs, xsl or guided (an "
+                                 "animation's job is --mode blender: the file's own settings)")
+        if args.worker_setup != "none":
+            raise InputError("--worker-setup is for --mode xs, xsl or guided: a Blender job takes "
+                             "the extension installed in the worker's Blender")
+    elif mode is not None and args.blender is not None:
+        raise InputError(f"--blender is for --mode blender (got --mode {mode})")
+    return mode
+
+
 def run(args) -> int:
     from ...core.farm.assets import asset_references
     from ...core.farm.job_bundle import check_bundle_folder, write_bundle
@@ -111,7 +146,11 @@ def run(args) -> int:
     # Everything that needs no scene first: a bad option fails before Blender loads.
     map_options = map_options_from_args(args)
     frames = parse_frames(args.frames) if args.frames is not None else None
+    mode = _mode(args, frames)
+    if mode == "blender":
+        return _run_blender(args, frames)
     resolution = parse_resolution(args.resolution)
+    args.mode = mode or "xsl"
     guided, tasks_per_frame = _guided_or_tiles(args)
     if guided is not None:
         guided_render_options(args, resolution)                # checked now, set later
@@ -134,6 +173,11 @@ def run(args) -> int:
     camera_model(scene)                     # InputError for a scene without a camera
     if frames is None:
         frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
+        if mode is None:                    # the scene's range decides: an animation's job is Blender's
+            args.mode = None
+            if _mode(args, frames) == "blender":
+                return _run_blender(args, frames, scene)
+            args.mode = "xsl"
     if guided is not None:
         options = guided_render_options(args, resolution or render_size(scene))
         what = (f"guided within {guided.time_budget:g} s per frame "
@@ -164,6 +208,44 @@ def run(args) -> int:
           f"{width}x{height}, {what}, up to {job.frames_per_task} frame(s) a task, on the "
           f"{device}; {len(files.found)} file(s) the scene reads "
           f"in asset_references.yaml; run here with: {shlex.join(command)}")
+    return 0
+
+
+def _run_blender(args, frames: str | None, scene=None) -> int:
+    """The plain Blender job (``core.farm.blender_job``)."""
+    from ...addon.scene.blend_session import open_blend
+    from ...addon.scene.external_files import external_files
+    from ...addon.scene.probe import camera_model
+    from ...core.farm.assets import asset_references
+    from ...core.farm.blender_job import BlenderJob, blender_job_template, blender_parameter_values
+    from ...core.farm.job_bundle import check_bundle_folder, write_bundle
+    from ...core.farm.job_template import parse_frames
+
+    bundle = check_bundle_folder(args.bundle)
+    scene_path = Path(args.scene).absolute()
+    if scene is None:
+        scene = open_blend(scene_path, args.scene_name)
+        camera_model(scene)
+    if frames is None:
+        frames = parse_frames(f"{scene.frame_start}-{scene.frame_end}:{scene.frame_step}")
+    device = args.device or ("GPU" if scene.cycles.device == "GPU" else "CPU")
+    job = BlenderJob(scene=scene_path, scene_name=scene.name, frames=frames, output=_output(args, bundle),
+                     executable=args.blender or BLENDER, device=device, auto_volumes=args.auto_volumes,
+                     frames_per_task=args.frames_per_task, task_timeout=args.task_timeout).check()
+    files = external_files()
+    assets = asset_references(scene_path, files, bundle / job.output)
+    write_bundle(bundle, blender_job_template(job), blender_parameter_values(job),
+                 {"scene": str(scene_path), "scene_name": scene.name, "frames": frames, "mode": "blender"},
+                 assets=assets)
+    _warn(scene, files)
+    command = ["openjd", "run", f"{bundle}/template.yaml", "-p", f"SceneFile={scene_path}"]
+    if Path(job.output).is_absolute():
+        command += ["-p", f"OutputDir={job.output}"]
+    volumes = "with Auto Volumes" if job.auto_volumes else "with the file's own volume settings"
+    print(f"wrote {bundle}/template.yaml and parameter_values.yaml: a Blender job, frames {frames} "
+          f"as the file renders them {volumes}, up to {job.frames_per_task} frame(s) a task, on the "
+          f"{device}; {len(files.found)} file(s) the scene reads in asset_references.yaml; run "
+          f"here with: {shlex.join(command)}")
     return 0
 
 

@@ -1,10 +1,12 @@
-"""``xsl-render render SCENE.blend --mode gold|xs|xsl|uniform|adaptive --max-spp N --out FILE.exr``
-and ``xsl-render render SCENE.blend --mode guided --time-budget SECONDS [--max-spp N] --out FILE.exr``.
+"""``xsl-render render SCENE.blend --out FILE.exr``: the file rendered as Blender renders it (its
+samples, denoiser, compositor and outputs) with Auto Volumes (``--estimator scene``: without),
+``addon.blender_render``. With ``--mode``, the paper's renders and the baselines:
+``--mode gold|xs|xsl|uniform|adaptive --max-spp N`` and ``--mode guided --time-budget SECONDS``.
 
-Writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel; the PNG's
-grey level is spp / max_spp, or spp / the most any pixel got for guided without a ceiling)
-and, with --stats, the run's statistics as JSON. A ``#`` run in
-FILE's name becomes the frame number; ``--frames START-END`` renders an animation
+With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per
+pixel; the PNG's grey level is spp / max_spp, or spp / the most any pixel got for guided
+without a ceiling) and, with --stats, the run's statistics as JSON. A ``#`` run in FILE's
+name becomes the frame number; ``--frames START-END`` renders an animation
 (``render_animation.py``).
 """
 from __future__ import annotations
@@ -25,16 +27,17 @@ from .options_from_args import map_file_of, render_request_from_args
 from .render_modes import check_scene, spp_scale, summary_line
 
 NAME = "render"
-HELP = ("render the scene selectively (xs, xsl), within a time budget where the error is "
-        "(guided), or as a baseline (gold, uniform, adaptive)")
+HELP = ("render the scene as Blender does with Auto Volumes, or (--mode) selectively (xs, xsl), "
+        "within a time budget where the error is (guided), or as a baseline (gold, uniform, adaptive)")
 MODES = ("gold", "xs", "xsl", "uniform", "adaptive", "guided")
 
 
 def add_arguments(parser) -> None:
     add_scene_arguments(parser)
-    parser.add_argument("--mode", required=True, choices=MODES,
-                        help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
-                             "uniform: equal samples (or time) everywhere; adaptive: Cycles' "
+    parser.add_argument("--mode", choices=MODES, default=None,
+                        help="without it: the file as Blender renders it (its samples, seed, "
+                             "denoiser, compositor and outputs) with Auto Volumes; gold: max-spp "
+                             "everywhere; xs/xsl: samples from the director map; uniform: equal samples (or time) everywhere; adaptive: Cycles' "
                              "adaptive sampling at equal time; guided: within --time-budget, "
                              "the samples spread evenly (or by --importance, or by a pilot's "
                              "error scores with --guided-exponent > 0)")
@@ -86,6 +89,8 @@ def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
     from ...core.sampling.render_request import MODE_TRAITS
     from .render_animation import maps_folder
 
+    if args.mode is None:
+        return {}, {"--out": Path(out or args.out), "--stats": args.stats}
     traits = MODE_TRAITS[args.mode]
     inputs = {"--maps' map": map_file_of(args)} if args.maps else {}
     # --save-maps keeps maps computed here (a frame range's ray cache too): none for a
@@ -118,9 +123,55 @@ def check(args) -> None:
     other mode's --max-spp, a budget file that reads). ``run`` renders the request built here
     (``args.request``)."""
     frames = _frames(args)
+    if args.mode is None:
+        _check_as_blender(args)
+        return
     args.request = render_request_from_args(args)
     if frames is not None and args.request[1] is not None:
         raise InputError("--frames computes every frame's own maps; --map and --maps hold one frame's")
+
+
+#: Options of the modes only: without --mode the file's own settings render.
+_MODE_ONLY = ("max_spp", "map", "maps", "save_maps", "frames", "spp", "budget_from", "equal_time",
+              "noise_threshold", "time_budget", "step_rate")
+
+
+def _check_as_blender(args) -> None:
+    """Without --mode: the file's own settings render, so an option of the modes is refused,
+    and the estimator is Auto Volumes (auto) or the file's (scene)."""
+    for name in _MODE_ONLY:
+        if getattr(args, name, None) is not None:
+            flag = "--" + name.replace("_", "-")
+            raise InputError(f"{flag} needs --mode (without it the file renders as Blender renders it)")
+    if args.estimator not in (None, "auto", "scene"):
+        raise InputError(f"--estimator {args.estimator} needs --mode (without it: auto, Auto Volumes, "
+                         "or scene, the file's own settings)")
+
+
+def _run_as_blender(args) -> int:
+    from ...addon.blender_render import render_still
+    from ...addon.scene.blend_session import open_blend
+    from ...addon.scene.state import preserved_scene
+    from ...core.files import write_json
+
+    out = Path(args.out)
+    scene = open_blend(args.scene, args.scene_name)
+    with preserved_scene(scene):
+        if args.frame is not None:
+            scene.frame_set(args.frame)        # an opened copy is never written to its file
+        if args.resolution is not None:
+            from .common import parse_resolution
+
+            (scene.render.resolution_x, scene.render.resolution_y), scene.render.resolution_percentage = \
+                parse_resolution(args.resolution), 100
+        if has_frame_marker(str(out)):
+            out = Path(frame_path(str(out), scene.frame_current))
+            separate_files(declared_files(args)[0], files(args, out)[1])
+        still = render_still(scene, out, auto=args.estimator != "scene")
+    if args.stats:
+        write_json(args.stats, still.to_dict())
+    print(f"blender: {still.describe()} -> {out}")
+    return 0
 
 
 def outputs_as_a_set(args) -> bool:
@@ -140,6 +191,8 @@ def _read_map(path: Path):
 
 
 def run(args) -> int:
+    if args.mode is None:
+        return _run_as_blender(args)
     out = Path(args.out)
     frames = _frames(args)
     request, map_file = args.request                  # built and checked by ``check``

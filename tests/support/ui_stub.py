@@ -31,6 +31,8 @@ class StubLayout:
         self._bpy, self.log = bpy, log
         self.active = self.enabled = True
         self.use_property_split = self.use_property_decorate = False
+        # Read and set back by the draw functions ``Panel.prepend`` / ``append`` add.
+        self.operator_context = "INVOKE_DEFAULT"
 
     def _check(self, function: str, kwargs: dict) -> None:
         """The keywords (and icon) the real UILayout.<function> accepts."""
