@@ -30,18 +30,23 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 
 from ..core.checks import available_memory, process_memory
-from ..core.sampling.sample_pattern import needs_debug_options
+from ..core.sampling.sample_pattern import auto_sample_pattern, needs_debug_options
 from ..core.sampling.shot_plan import shot_of
 from .cycles.own_renders import rendering_own
+from .cycles.sample_pattern import enable_debug_patterns
 from .cycles.selective_render import apply_estimator
-from .cycles.volume_record import FrameRecord, JobRecord, unsupported
 from .maps import shot_choice
 from .scene.animation import has_media, media_move
+from .scene.changes import ChangeRecord
 
 #: Keep Cycles' session between frames only while the machine has this many times the memory
 #: Blender holds free (the kept session holds about one frame's render data, which a scene's
 #: evaluated copy bounds; a rule of thumb, not a measurement).
 MEMORY_HEADROOM = 2.0
+#: The volume settings Blender must have for auto's choice (Blender 5: ray marching per scene,
+#: a step per material and per world).
+NEEDED_SETTINGS = (("scene", "volume_biased"), ("scene", "volume_step_rate"),
+                   ("material", "volume_step_rate"), ("world", "volume_step_size"))
 LOCK_INTERFACE = ("Auto Volumes needs Render › Performance › Lock Interface for a render started "
                   "from the interface (Blender lets a render change settings only then); this "
                   "render uses the file's own volume settings")
@@ -49,13 +54,16 @@ LOCK_INTERFACE = ("Auto Volumes needs Render › Performance › Lock Interface 
 
 @dataclass
 class _Job:
-    """One render job of one scene."""
+    """One render job of one scene: ``record`` what lasts it (Blender's debug preferences a
+    debug sample pattern needs while Cycles creates its session, persistent data), ``frame``
+    what auto sets for the frame being rendered; both restore by what they changed
+    (``addon.scene.changes``)."""
 
-    record: JobRecord
+    record: ChangeRecord
     kept_before: bool                       # the artist's persistent data: a session may be kept
     keeps: bool                             # this render keeps its session between frames
     shots: dict = field(default_factory=dict)       # (first, last) -> ShotChoice, or the error
-    frame: FrameRecord | None = None        # the frame's settings while auto's are applied
+    frame: ChangeRecord | None = None       # the frame's settings while auto's are applied
     synced: object = None                   # the choice the kept session last synced
     changed: list = field(default_factory=list)     # datablocks the render changed
     tagged: bool = False
@@ -72,6 +80,20 @@ last_plans: dict[int, object] = {}
 _saved_ranges: dict[int, tuple[int, int]] = {}
 #: The last warning printed (for scripts and tests that look at it).
 last_warning = ""
+
+
+def unsupported() -> str:
+    """Why this Blender cannot render with auto's choice ("" where it can)."""
+    import bpy
+
+    owners = {"scene": bpy.types.Scene, "material": bpy.types.Material, "world": bpy.types.World}
+    for owner, name in NEEDED_SETTINGS:
+        cycles = owners[owner].bl_rna.properties.get("cycles")
+        if cycles is None:
+            return "Cycles is not enabled"
+        if name not in cycles.fixed_type.properties:
+            return f"this Blender's Cycles has no {owner} setting '{name}' (it needs Blender 5.0 or newer)"
+    return ""
 
 
 def enabled(scene) -> bool:
@@ -138,7 +160,9 @@ def apply_to_scene(scene) -> tuple[object, str]:
     choice, left_out = plan.choice, ""
     if choice.sample_pattern is not None and needs_debug_options(choice.sample_pattern):
         choice, left_out = replace(choice, sample_pattern=None), "the sample pattern stays the file's"
-    apply_estimator(scene, choice)
+    # Through a record that is never restored: what Apply to Scene writes stays (and a
+    # medium linked from a library is left as it is).
+    apply_estimator(scene, choice, ChangeRecord())
     for datablock in (scene, scene.world, *bpy.data.materials):
         if datablock is not None:
             datablock.update_tag()          # add-on properties do not tag: the viewport would keep the old
@@ -178,10 +202,13 @@ def _start(scene) -> None:
     if not _may_change_data(scene):
         _warn(scene, LOCK_INTERFACE)
         return
-    job = _Job(JobRecord(scene), kept_before=scene.render.use_persistent_data, keeps=False)
+    job = _Job(ChangeRecord(), kept_before=scene.render.use_persistent_data, keeps=False)
     _jobs[key] = job
+    if needs_debug_options(auto_sample_pattern(scene.cycles.sampling_pattern)):
+        # Cycles reads them as it creates its session, which may last the whole render.
+        enable_debug_patterns(scene, job.record)
     if _keeps_session(scene):
-        scene.render.use_persistent_data = True
+        job.record.set(scene.render, "use_persistent_data", True)
         job.keeps = True
 
 
@@ -201,10 +228,10 @@ def _frame_choice(scene, job: _Job):
 
 def _apply(scene, job: _Job) -> None:
     plan = _frame_choice(scene, job)
-    job.frame = FrameRecord(scene)
-    apply_estimator(scene, plan.choice)
-    _note(scene, plan)
-    changed = job.frame.changed()
+    job.frame = ChangeRecord()
+    apply_estimator(scene, plan.choice, job.frame)
+    _note(scene, plan, job.frame)
+    changed = job.frame.datablocks()
     before, job.changed = job.changed, _union(job.changed, changed)
     if (job.kept_before or job.keeps) and plan.choice != job.synced:
         # A session kept from before (or from the frame before) holds other settings:
@@ -217,7 +244,7 @@ def _apply(scene, job: _Job) -> None:
     print(f"Auto Volumes: {scene.name} frame {scene.frame_current}: {plan.describe()}", flush=True)
 
 
-def _note(scene, plan) -> None:
+def _note(scene, plan, changes: ChangeRecord) -> None:
     """The choice in the frame's EXR header: Blender's stamp note, as metadata only."""
     render = scene.render
     if render.use_stamp:
@@ -225,8 +252,8 @@ def _note(scene, plan) -> None:
     text = f"Auto Volumes: {shot_choice.applied(plan.choice)} (decided at frame {plan.frame})"
     if render.use_stamp_note and render.stamp_note_text:
         text = f"{render.stamp_note_text} | {text}"
-    render.use_stamp_note = True
-    render.stamp_note_text = text
+    changes.set(render, "use_stamp_note", True)
+    changes.set(render, "stamp_note_text", text)
 
 
 def _restore_frame(job: _Job) -> None:

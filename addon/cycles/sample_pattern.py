@@ -20,7 +20,7 @@ def apply_sample_pattern(scene, pattern: str, changes=None) -> None:
     ``preserved_scene`` block, the debug preferences and the persistent data go through it
     too; inside one, the outermost block puts them back, once a run)."""
     if needs_debug_options(pattern):
-        _enable_debug_patterns(scene, None if changes is None or preserved_scene_open(scene) else changes)
+        enable_debug_patterns(scene, None if changes is None or preserved_scene_open(scene) else changes)
     if changes is not None:
         changes.set(scene.cycles, "sampling_pattern", pattern)
     else:
@@ -35,9 +35,10 @@ def debug_patterns_enabled() -> bool:
     return all(getattr(getattr(preferences, path), name) for path, name in DEBUG_PATTERN_PREFERENCES)
 
 
-def _enable_debug_patterns(scene, changes=None) -> None:
+def enable_debug_patterns(scene, changes=None) -> None:
     """Turn the debug preferences on (through ``changes`` where given: the unsaved-changes
-    flag noted first, so that it is put back last)."""
+    flag noted first, so that it is put back last); a session persistent data kept without
+    them is let go."""
     import bpy
 
     if debug_patterns_enabled():
