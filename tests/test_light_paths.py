@@ -22,6 +22,7 @@ class Slab:
     def __init__(self, base=3.0, wave=0.9, period=0.9, albedo=0.9, step=0.4):
         self.base, self.wave, self.period, self.albedo = base, wave, period, albedo
         self.extra = {"cycles_step": step}
+        self.kind = "mesh"
         self.step = step
 
     def density(self, points):

@@ -8,28 +8,18 @@ gold renders with different seeds differ by mean FLIP ~0.17 at 16 spp), which is
 an artist looks at; after denoising they differ by ~0.045.
 
 OIDN is called directly from the library Blender ships (``oidn_library``), set up as the
-compositor's Denoise node sets it up (Prefilter Fast, Quality High, HDR), with the same
-result bit for bit (tests/test_denoise.py). Going through the compositor (a temporary scene
+compositor's Denoise node sets it up (Quality High, HDR, the file's prefilter), with the
+same result bit for bit (tests/test_denoise.py). Going through the compositor (a temporary scene
 rendered for its compositing, the fallback where the library cannot be loaded) would make
 Cycles sync the rendering scene again at its next render: a whole octree build on
 heterogeneous fog, in the middle of a guided render or between an animation's frames.
 
-Prefilter "Fast" (every mode's, and the converged reference's): the albedo and normal guides
-are taken as they are rather than denoised first (OIDN's cleanAux off: it denoises them along
-with the image). Measured on the road at 512x288 from 4 samples, against a denoised 64-sample
-frame: Fast 0.25 s for mean FLIP 0.042, Accurate (Cycles' default) 1.6 s for 0.038, no
-guides 0.25 s for 0.042 but softer edges on textured surfaces.
-
-``prefilter_guides`` (``--estimator auto``'s choice, so guided's and the panel's recommended
-mode's): in fog Cycles writes the guides at the first scattering event, so they are as noisy
-as the image, and that noise, correlated with the image's, is what OIDN then keeps as detail.
-Denoised first (quality Balanced: as good as High or better on balls_a and statue, within
-1-2 % of it on road and balls_b, for 40-60 % of its time), they lower mean FLIP at equal
-samples by 2-27 % (16 spp,
-medians of 3 seeds: road 0.0400 -> 0.0392, balls_a 0.0375 -> 0.0274, balls_b 0.0504 ->
-0.0473, statue 0.0442 -> 0.0409; 32 spp: 2-8 %) for 0.3-0.45 s at 256x192 and 1.1 s at
-512x288 on 2 cores (``bench/bench_denoise_guides.py``). Guides from a surface-only render, or
-none, helped some scenes and hurt road (README, "Denoising guides in fog").
+The guides' prefilter follows the file's own denoiser (``selective_render.guide_prefilter``)
+in every mode and in the converged reference: Blender 5's default, "Accurate", denoises the
+albedo and normal guides first (in fog Cycles writes them at the first scattering event, so
+they are as noisy as the image, and OIDN would keep that noise as detail); "Fast" takes
+them as they are (OIDN's cleanAux off). So a run is denoised as the artist's own render of
+the file would be, and a comparison with the file measures the estimator, not the denoise.
 
 Light too strong for 32-bit floats: infinite or NaN values are set to 0 first, as Cycles
 sets a non-finite sample (``core.sampling.finite_pixels``; one Inf spreads over OIDN's
@@ -46,19 +36,19 @@ from pathlib import Path
 import numpy as np
 
 from ...core.sampling.finite_pixels import zero_non_finite
-from .oidn_library import QUALITY_BALANCED, QUALITY_HIGH
+from .oidn_library import QUALITY_HIGH
 from .oidn_library import load as load_oidn
 from .render import read_exr_parts
 
 _SCENE = "xsl_render denoise"
 #: What prefiltered guides cost over the plain denoise, as a multiple of it (measured: 4x at
-#: 256x192 and 512x288, the prefilter's two filters at Balanced beside the main one at High).
+#: 256x192 and 512x288, the prefilter's two filters beside the main one).
 PREFILTER_COST = 4.0
 #: The denoising procedure's version: part of the converged reference's cache key
 #: (``core.validation.reference``). Bump it with any change to what ``denoise`` does
 #: (settings, prefilter, guides), then regenerate the shipped reference
 #: (tools/regenerate_reference.py); a test compares the shipped entry's key.
-DENOISE_VERSION = "oidn-hdr-fast-prefilter-1"
+DENOISE_VERSION = "oidn-hdr-file-prefilter-2"
 #: The largest value a frame goes to OIDN with (2^100; a frame up to 2^120 denoised within
 #: 2e-6 of itself at 1 in a test, 1e37 came back black). Frames below it are untouched.
 OIDN_PEAK = 2.0 ** 100
@@ -90,8 +80,8 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
 
     ``rgba`` is (H, W, 4) scene-linear; alpha passes through unchanged. Returns float32
     (H, W, 4). ``prefilter_guides``: the guides are denoised first, each by OIDN's filter on
-    its own at quality Balanced, and then taken as clean (OIDN's and Blender's "Accurate"
-    prefilter; auto's choice, see ``PREFILTER_COST``).
+    its own, and then taken as clean (OIDN's and Blender's "Accurate" prefilter, the file's
+    choice: ``selective_render.guide_prefilter``).
     """
     rgba = zero_non_finite(rgba)[0]
     albedo = None if albedo is None else zero_non_finite(albedo, whole_frame=False)[0]
@@ -108,8 +98,8 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
         normal = None if normal is None else normal[::-1]
         clean = prefilter_guides and albedo is not None
         if clean:
-            albedo = library.prefilter(albedo, "albedo", QUALITY_BALANCED)
-            normal = None if normal is None else library.prefilter(normal, "normal", QUALITY_BALANCED)
+            albedo = library.prefilter(albedo, "albedo", QUALITY_HIGH)
+            normal = None if normal is None else library.prefilter(normal, "normal", QUALITY_HIGH)
         out = library.denoise(rgba[::-1], albedo, normal, hdr=True, clean_aux=clean,
                               quality=QUALITY_HIGH)[::-1]
     else:
