@@ -9,7 +9,7 @@ import bpy
 class _AutoVolumesOperator:
     @classmethod
     def poll(cls, context):
-        from ..addon.cycles.volume_support import unsupported
+        from ..addon.auto_volumes import unsupported
 
         if context.scene is None:
             cls.poll_message_set("There is no scene")
