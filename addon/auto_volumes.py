@@ -35,6 +35,7 @@ from ..core.sampling.shot_plan import shot_of
 from .cycles.own_renders import rendering_own
 from .cycles.sample_pattern import enable_debug_patterns
 from .cycles.selective_render import apply_estimator
+from .cycles.volume_settings import unsupported
 from .maps import shot_choice
 from .scene.animation import has_media, media_move
 from .scene.changes import ChangeRecord
@@ -43,10 +44,6 @@ from .scene.changes import ChangeRecord
 #: Blender holds free (the kept session holds about one frame's render data, which a scene's
 #: evaluated copy bounds; a rule of thumb, not a measurement).
 MEMORY_HEADROOM = 2.0
-#: The volume settings Blender must have for auto's choice (Blender 5: ray marching per scene,
-#: a step per material and per world).
-NEEDED_SETTINGS = (("scene", "volume_biased"), ("scene", "volume_step_rate"),
-                   ("material", "volume_step_rate"), ("world", "volume_step_size"))
 LOCK_INTERFACE = ("Auto Volumes needs Render › Performance › Lock Interface for a render started "
                   "from the interface (Blender lets a render change settings only then); this "
                   "render uses the file's own volume settings")
@@ -80,20 +77,6 @@ last_plans: dict[int, object] = {}
 _saved_ranges: dict[int, tuple[int, int]] = {}
 #: The last warning printed (for scripts and tests that look at it).
 last_warning = ""
-
-
-def unsupported() -> str:
-    """Why this Blender cannot render with auto's choice ("" where it can)."""
-    import bpy
-
-    owners = {"scene": bpy.types.Scene, "material": bpy.types.Material, "world": bpy.types.World}
-    for owner, name in NEEDED_SETTINGS:
-        cycles = owners[owner].bl_rna.properties.get("cycles")
-        if cycles is None:
-            return "Cycles is not enabled"
-        if name not in cycles.fixed_type.properties:
-            return f"this Blender's Cycles has no {owner} setting '{name}' (it needs Blender 5.0 or newer)"
-    return ""
 
 
 def enabled(scene) -> bool:
