@@ -28,6 +28,7 @@ import argparse
 import os
 import re
 import sys
+import textwrap
 import traceback
 from contextlib import nullcontext
 from typing import Callable
@@ -63,14 +64,20 @@ class OneLineParser(argparse.ArgumentParser):
 def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
     """The command line. ``in_blender``: the parser of the batch entry (``operators/batch.py``),
     the same commands and options, with SCENE.blend left out (Blender has the file open)."""
-    from .commands import COMMANDS
+    from .commands import COMMANDS, GROUPS
 
-    parser = OneLineParser(prog="xsl-render",
-                           description="Perceptual selective rendering of participating media "
-                                       "(Sundstedt et al. 2007) with Blender Cycles.")
+    parser = OneLineParser(prog="xsl-render", usage="%(prog)s [-h] [--verbose] COMMAND ...",
+                           formatter_class=argparse.RawDescriptionHelpFormatter,
+                           description=textwrap.fill(
+                               "Render fog, smoke and clouds in Blender Cycles faster at the same "
+                               "look (Auto Volumes), and the paper's perceptual selective rendering "
+                               "of participating media.", 78),
+                           epilog=command_list(GROUPS))
     parser.add_argument("--verbose", action="store_true",
                         help="keep Blender's console output in a log file and print its path")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    # The commands are listed by group in the epilog, not as one list.
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser,
+                                help=argparse.SUPPRESS, prog="xsl-render")
     sub.required = True
     for command in COMMANDS:
         child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
@@ -78,6 +85,20 @@ def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
         command.add_arguments(child)
         child.set_defaults(run=command.run, command=command, file_options=file_options(child))
     return parser
+
+
+def command_list(groups: dict) -> str:
+    """The commands by group, each with its help, as the top-level --help ends."""
+    width = max(len(command.NAME) for commands in groups.values() for command in commands) + 2
+    lines = []
+    for title, commands in groups.items():
+        lines.append(f"{title}:")
+        for command in commands:
+            wrapped = textwrap.wrap(command.HELP, 78 - width - 2)
+            lines.append(f"  {command.NAME:<{width}}{wrapped[0]}")
+            lines += [" " * (width + 2) + line for line in wrapped[1:]]
+        lines.append("")
+    return "\n".join(lines) + "'xsl-render COMMAND --help' says more about each."
 
 
 class _Failed(Exception):
