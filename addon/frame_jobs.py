@@ -163,7 +163,6 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 
     ``sequence``: the frames of one run share its time (``SequenceBudget``: each frame gets
     what the range has left per frame still to render, the scene sync outside it)."""
-    guided.check()
 
     def prepare(scene) -> Steps[tuple]:
         maps = named_map_steps(scene, guided.importance, map_options, options.resolution, cache_dir)

@@ -168,7 +168,6 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     them to the frames after it, which find the scene synced); what its final pass cost per
     sample is told to ``pace`` for the next frame, which renders without a pilot."""
     sync_outside = pace is not None
-    guided.check()
     budget = guided.time_budget
     # Auto's estimator prediction ran before, inside the budget like the importance map.
     chosen = options.volume_estimator()

@@ -59,9 +59,9 @@ class RenderOutcome:
 def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     """Apply the resolution option, check the camera, warn about a non-Cycles engine.
 
-    Must run inside ``preserved_scene``. Returns (width, height, warnings).
+    Must run inside ``preserved_scene``. Returns (width, height, warnings). The options were
+    checked where they were made.
     """
-    options.check()
     if options.resolution is not None:
         scene.render.resolution_x, scene.render.resolution_y = options.resolution
         scene.render.resolution_percentage = 100

@@ -52,7 +52,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .farm_job import (DEFAULT_TASK_TIMEOUT, DEVICES, EXECUTABLE, MODES,  # noqa: F401
+from ..option_table import DEVICES  # noqa: F401
+from .farm_job import (DEFAULT_TASK_TIMEOUT, EXECUTABLE, MODES,  # noqa: F401
                        SELECTIVE_MODES, FarmJob, guided_timeout, parse_frames)
 from .job_parameters import checked_parameters, definition, task_arguments
 from .worker_environment import cancelation, job_environment

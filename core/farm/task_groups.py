@@ -20,11 +20,11 @@ import heapq
 from dataclasses import dataclass
 
 from ..errors import SettingError
+from ..option_table import MAX_GROUPS, OPTIONS  # noqa: F401 (the bound of check_groups)
 from ..sampling.tile_plan import Rect
 
 #: More tile tasks per frame than this is a submission mistake, not a plan (a 4K frame at
 #: the smallest tile has ~130k rectangles, but a farm job of a million tasks is no help).
-MAX_GROUPS = 10000
 
 
 def rect_cost(rect: Rect, render_cost: int) -> int:
@@ -34,10 +34,7 @@ def rect_cost(rect: Rect, render_cost: int) -> int:
 
 def check_groups(groups: int) -> int:
     """``groups`` if it is a sensible number of tile tasks per frame, else InputError."""
-    if not 1 <= groups <= MAX_GROUPS:
-        raise SettingError(f"{{tasks_per_frame.name}} must be between 1 and {MAX_GROUPS} "
-                           "(got {tasks_per_frame.value})", tasks_per_frame=groups)
-    return groups
+    return OPTIONS["tasks_per_frame"].check(groups)
 
 
 def partition(costs: list[int], groups: int) -> list[list[int]]:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import SettingError
-from .options import MAX_N, MAX_SIGMA_BASE
+from ..option_table import MAX_N, MAX_SIGMA_BASE
 from .scale_space import gaussian_mixture_blur
 
 #: Sigmas are specified for this many pixels on the longer side (the paper's 512 px).

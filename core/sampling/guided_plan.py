@@ -48,14 +48,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import SettingError
+from ..option_table import DEFAULTS, OPTIONS
 from .composite import Window
 from .render_options import UNBOUNDED_SPP  # noqa: F401 (where guided's callers found it)
 from .tile_plan import Rect, merge_rects, render_order, tile_windows
 
-#: The longest time budget accepted: a week (anything longer is a typo).
-MAX_TIME_BUDGET = 7 * 24 * 3600.0
-#: Director maps the allocation can weigh the error by.
-IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
 #: A tile's score never falls below this share of the frame's mean score, so that flat
 #: tiles, whose pilot gradient is noise-free zero, still get their share.
 SCORE_FLOOR = 0.05
@@ -94,31 +91,18 @@ class GuidedOptions:
     """
 
     time_budget: float
-    pilot_fraction: float = 0.05
-    exponent: float = 0.0
-    importance: str = "none"
-    level_ratio: float = 1.5
+    pilot_fraction: float = DEFAULTS["pilot_fraction"]
+    exponent: float = DEFAULTS["exponent"]
+    importance: str = DEFAULTS["importance"]
+    level_ratio: float = DEFAULTS["level_ratio"]
 
     def check(self) -> "GuidedOptions":
-        """Raise InputError naming the first impossible option; return self."""
-        if not (math.isfinite(self.time_budget) and self.time_budget > 0.0):
-            raise SettingError("{time_budget.name} must be a positive number of seconds "
-                               "(got {time_budget.value})", time_budget=self.time_budget)
-        if self.time_budget > MAX_TIME_BUDGET:
-            raise SettingError("{time_budget} is more than a week",
-                               time_budget=f"{self.time_budget:g} s")
-        if not (math.isfinite(self.pilot_fraction) and 0.0 < self.pilot_fraction <= 1.0):
-            raise SettingError("{pilot_fraction.name} must be in (0, 1] (got {pilot_fraction.value})",
-                               pilot_fraction=self.pilot_fraction)
-        if not (math.isfinite(self.exponent) and 0.0 <= self.exponent <= 2.0):
-            raise SettingError("{exponent.name} must be in [0, 2] (got {exponent.value})",
-                               exponent=self.exponent)
-        if self.importance not in IMPORTANCE_MAPS:
-            raise SettingError(f"{{importance.name}} must be one of {', '.join(IMPORTANCE_MAPS)} "
-                               "(got '{importance.value}')", importance=self.importance)
-        if not (math.isfinite(self.level_ratio) and 1.0 < self.level_ratio <= 4.0):
-            raise SettingError("{level_ratio.name} must be in (1, 4] (got {level_ratio.value})",
-                               level_ratio=self.level_ratio)
+        """Raise InputError naming the first impossible option (each against its option,
+        ``core.option_table``); return self."""
+        if self.time_budget is None:
+            raise SettingError("{time_budget.name} SECONDS is needed", time_budget=None)
+        for name in ("time_budget", "pilot_fraction", "exponent", "importance", "level_ratio"):
+            OPTIONS[name].check(getattr(self, name))
         return self
 
     def to_dict(self) -> dict:

@@ -24,7 +24,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
-from .render_options import MIN_TILE_SIZE, RenderOptions
+from ..option_table import MIN_TILE_SIZE
+from .render_options import RenderOptions
 
 PLAN_FORMAT = 1
 

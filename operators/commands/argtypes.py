@@ -3,10 +3,13 @@ parsed: before Blender loads, before any work, before anything is written.
 
 An option says what it accepts with ``type=``::
 
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, ...)
-    parser.add_argument("--time-budget", type=argtypes.number(above=0), ...)
+    parser.add_argument("--spp", type=argtypes.SAMPLES, ...)
+    parser.add_argument("--noise-threshold", type=argtypes.number(above=0, hi=1), ...)
     parser.add_argument("--out", type=argtypes.output_file(".exr"), ...)
     parser.add_argument("scene", type=argtypes.SCENE, ...)
+
+(A setting of ``core.option_table`` is added with ``option_flags.add_option``, its type
+built from the table.)
 
 A bad value ends the command with exit code 2 and one line, ``xsl-render render: argument
 --max-spp: must be a whole number from 1 to 16777216 (Cycles' limit), not 0``. Paths come
@@ -40,6 +43,11 @@ def _converter(function, label: str, keep_text: bool = False, role: str | None =
     convert.__name__ = label                # argparse names the type in some messages
     convert.role = role
     return convert
+
+
+def checked_by(function, label: str):
+    """An argparse type that is ``function(text)`` (a check of ``core.option_table``)."""
+    return _converter(function, label)
 
 
 def integer(lo: int = checks.INT32_MIN, hi: int = checks.INT32_MAX, limit: str = ""):

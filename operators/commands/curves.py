@@ -31,6 +31,7 @@ def add_arguments(parser) -> None:
     from ...core.validation.contestants import curve_names
     from . import argtypes
     from .common import add_scene_arguments
+    from .option_flags import add_option
     from .reference import ceiling
 
     add_scene_arguments(parser)
@@ -54,8 +55,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--curves", metavar="LIST",
                         help=f"curves to render (default all: {', '.join(curve_names())}); "
                              "uniform is always in")
-    parser.add_argument("--seed", type=argtypes.SEED, default=0,
-                        help="first contestant seed (default 0; never the reference's)")
+    add_option(parser, "seed", help="first contestant seed (never the reference's)")
     parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
                         help="ColorVideoVDP's JOD where it is installed (default on)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
