@@ -56,6 +56,8 @@ from ..render_dispatch import request_frame_job
 from ..scene.state import preserved_scene
 
 RequestMaker = Callable[[Contestant, RenderOptions, "float | None"], RenderRequest]
+#: How many times the ceiling a time-limited contestant may render (its clock stops it first).
+TIME_LIMIT_CEILINGS = 16
 
 
 def warm_up(scene) -> None:
@@ -96,6 +98,15 @@ def _guided(contestant: Contestant, options: RenderOptions, budget_s) -> RenderR
                          map_options=MapOptions())
 
 
+def _time_limited(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    """Uniform sampling stopped by Cycles' own time limit at ``budget_s`` seconds (the scene's
+    sync and auto's prediction inside it, the denoise after it), as Blender's Time Limit
+    renders for an artist; up to ``TIME_LIMIT_CEILINGS`` times the ceiling, so that the clock,
+    not the count, stops it."""
+    ceiling = TIME_LIMIT_CEILINGS * options.max_spp
+    return RenderRequest("uniform", replace(options, max_spp=ceiling), seconds=float(budget_s))
+
+
 def _switch_guiding_on(scene) -> None:
     """Cycles' path guiding (surface and volume guiding as the scene has them, Blender's
     defaults: both on). Whether Cycles really used it shows in the image: the curves job
@@ -111,6 +122,7 @@ REQUESTS: dict[str, RequestMaker] = {
     "xs": _selective,
     "xsl": _selective,
     "guided": _guided,
+    "time_limit": _time_limited,
 }
 #: Kinds whose scene is set up before they render (inside the run's ``preserved_scene``).
 SETUPS: dict[str, Callable[[object], None]] = {"guiding": _switch_guiding_on}
