@@ -1,19 +1,15 @@
 #!/usr/bin/env python3
 """Set up and run xsl_render from nothing: ``python3 run.py build``, ``demo`` or ``test``.
 
-On first use (and whenever requirements.lock or pyproject.toml change) this creates
-``.venv`` next to this file, installs the pinned versions from requirements.lock and
-installs the project itself in editable mode, which puts the ``xsl-render`` command
-into ``.venv``. Then it does its job:
+On first use (and whenever requirements.lock or pyproject.toml change) it creates ``.venv``,
+installs the pinned versions and the project itself (the ``xsl-render`` command), then:
 
-    build [ARGS...]  the extension's zips for Blender, one per platform, in dist/
-                     (tools/build_extension.py: the pinned wheels downloaded, validated)
-    demo [ARGS...]   the main job on the bundled road scene (extra ARGS are passed on)
-    test [ARGS...]   the test suite: ``pytest`` on every core, then the tests marked timing
-                     alone; with ARGS, one ``pytest ARGS`` run
+    build [ARGS...]  the extension's zips, one per platform, in dist/ (tools/build_extension.py)
+    demo [ARGS...]   the main job on the bundled road scene
+    test [ARGS...]   the suite: pytest on every core, then the tests marked timing alone;
+                     with ARGS, one ``pytest ARGS`` run
 
-Only the Python standard library is used here, so any Python 3.11 can run it.
-"""
+Standard library only, so any Python 3.11 runs it."""
 from __future__ import annotations
 
 import hashlib

@@ -1,20 +1,15 @@
-"""Benchmark: F12 with Auto Volumes against F12 without, on every example scene, at the
-scene's own samples and at 16, 64 and 256 spp; the equal-quality speedup read along the file's
-own time-quality curve (``core.validation.curves``). Its table goes into docs/performance.md
-(section auto_volumes) and its rows of the README's headline table (``performance_doc``).
+"""Benchmark: F12 with Auto Volumes against F12 without, on every example scene, at the scene's
+own samples and at 16, 64 and 256 spp; the equal-quality speedup read along the file's own F12
+curve. Writes docs/performance.md's section auto_volumes and its rows of the headline table.
 
-Each render is Blender's own F12 (``bpy.ops.render.render(write_still=True)``) of the file as
-saved at its bench size (``bench_estimator.SIZES``): its denoiser, its persistent data (a fresh
-session per render where the file has none), seeds 0 .. repeats - 1, the two arms
-alternating. The time is the whole operator call, Auto Volumes' prediction included. Every
-error is taken against the scene's converged reference (rendered and cached on first use,
-``addon.validation.reference``). The file's F12 at ``CURVE`` samples is the curve the auto
-arm's error is read along; ``bench_estimator.py``'s auto row is the command line's own (the
-two should agree within noise: one choice, two front ends).
+Each render is Blender's own F12 of the file as saved at its bench size, its denoiser and
+persistent data, seeds 0 .. repeats - 1, the two arms alternating; the time is the whole
+operator call, Auto Volumes' prediction included; every error is against the scene's
+converged reference. ``bench_estimator.py``'s auto row is the command line's (one choice,
+two front ends: they should agree within noise).
 
     .venv/bin/python bench/bench_auto_volumes.py --scenes balls_b,street --repeats 3
-    .venv/bin/python bench/bench_auto_volumes.py --tiny          # end to end in a minute or so
-"""
+    .venv/bin/python bench/bench_auto_volumes.py --tiny          # end to end in a minute or so"""
 from __future__ import annotations
 
 import statistics

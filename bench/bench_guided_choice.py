@@ -1,24 +1,16 @@
-"""Benchmark: how a render should spend a time budget. Today's ``--mode guided`` against two
-simpler ways with auto's choice, at equal time, on the example scenes (and lit-suite seeds):
+"""Benchmark: how a render should spend a time budget. Today's ``--mode guided`` against auto
+stopped by Cycles' own time limit (the ``time_limit`` contestant: Blender's Time Limit) and
+auto at the count the budget affords, priced by auto's own curve
+(``core.sampling.budget_count``), at equal time on the example scenes and lit-suite seeds.
 
-- ``time_limit``: uniform sampling stopped by Cycles' own time limit (Blender's Time Limit;
-  the ``time_limit`` contestant of ``addon.validation.contestants``);
-- ``afforded``: uniform at the sample count the budget affords, priced by auto's own curve
-  (an earlier run's times: ``core.sampling.budget_count.affordable_count``).
+Per scene, a curves job in this process (finished runs reused): the file's curve (the
+baseline; Blender 5's sample pattern unless ``--as-saved``), auto's curve, the contenders at
+the file's 16 and 32 spp times; medians of ``--repeats``. Prints each contender's time over
+its budget and its speedup over the file's and auto's curves (mean FLIP, p95-tile FLIP, MSE),
+and writes docs/performance.md's section guided_choice (not with --tiny). Idle machine only.
 
-Per scene, one curves job in this process (finished runs reused): the file's curve (uniform
-with its own settings, 4..64 spp, the baseline; ``--as-saved`` keeps the example files'
-legacy sample pattern, else they get Blender 5's as a new file has it), auto's curve
-(``--estimator auto``), guided and time_limit at the times the file took for 16 and 32 spp,
-then afforded at those times. Medians of ``--repeats``. Per contender and budget: time over
-budget, equal-quality speedup over the file's curve and over auto's on mean FLIP, p95-tile
-FLIP and MSE; last, each contender's median over auto's curve. Written to
-docs/performance.md (section guided_choice; not with --tiny). Time only on an idle machine.
-
-    .venv/bin/python bench/bench_guided_choice.py --repeats 3
-    .venv/bin/python bench/bench_guided_choice.py --scenes road --lit-seeds 3,8,12
-    .venv/bin/python bench/bench_guided_choice.py --tiny          # end to end, a few minutes
-"""
+    .venv/bin/python bench/bench_guided_choice.py --repeats 3 [--lit-seeds 3,8,12]
+    .venv/bin/python bench/bench_guided_choice.py --tiny          # end to end, a few minutes"""
 from __future__ import annotations
 
 import statistics

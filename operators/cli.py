@@ -1,27 +1,13 @@
 """The ``xsl-render`` command: parse, check, call, report.
 
-Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(parser)`` and
-``run(args) -> int``, and optionally:
-
-- ``files(args) -> (inputs, outputs)``: the files its options imply beyond the options
-  themselves (label -> path; ``commands/argtypes.declared_files``), such as a render's
-  ``_spp.exr``; with the options' files they go through one check before anything else
-  (``core.checks.separate_files``): no output is the same file as an input or another
-  output, no input is a FIFO or device, every name fits the system's limits;
-- ``check(args)``: what relates several options, raising InputError; it runs once every
-  option was checked on its own (``commands/argtypes.py``) and before ``run``, so a bad
-  input is refused before Blender loads or anything is written;
-- ``OUTPUTS_AS_A_SET`` (default True), or ``outputs_as_a_set(args)`` where it depends on the
-  options: every file the command writes appears at its end, all at once, or not at all
-  (``core.files.output_set``). False for commands that keep finished work as they go (an
-  animation, the validation, farm tasks);
-- ``INTERRUPTIBLE`` (default False): Ctrl-C raises KeyboardInterrupt in the command (a server
-  that shuts down cleanly) instead of cancelling it (``signals.py``).
-
-Exit codes: 0 success, 2 bad input (one line on stderr, no traceback; a setting is named by
-its option, ``commands/setting_flags.py``), 130 cancelled (143 for SIGTERM), 1 an
-unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
-"""
+A subcommand (``operators/commands/<name>.py``) has ``add_arguments(parser)`` and
+``run(args) -> int`` and may have ``files(args)`` (the files its options imply, checked with
+the options' own by ``core.checks.separate_files`` before anything else), ``check(args)`` (what
+relates several options, before Blender loads), ``OUTPUTS_AS_A_SET`` / ``outputs_as_a_set(args)``
+(every file appears at the end or none; False where finished work is kept as it goes) and
+``INTERRUPTIBLE`` (Ctrl-C raises KeyboardInterrupt in it). Exit codes: 0 success, 2 bad input
+(one line, a setting named by its option), 130 / 143 cancelled, 1 an unexpected failure (one
+line; the traceback with ``XSL_DEBUG=1``)."""
 from __future__ import annotations
 
 import argparse

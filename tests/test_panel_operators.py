@@ -359,7 +359,7 @@ def budget_fog(blender, addon):
 #: samples renders at the power (``sobol_friendly``: the samples left would buy little, or
 #: make the frame worse), and the flat pass's later columns keep the first one's count
 #: (``column_count``). The issue's "within 15 % of its time budget" holds as a ceiling (1.1x
-#: below); the example scenes' runs used 0.87-1.08 of theirs (README, "The sample pattern").
+#: below); the example scenes' runs used 0.87-1.08 of theirs (docs/performance.md, "Guided").
 EARLY = 1 / POWER_OF_TWO_SLACK
 
 

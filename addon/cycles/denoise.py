@@ -1,42 +1,14 @@
 """Denoise a whole frame with the denoiser Cycles itself uses (Intel Open Image Denoise).
 
-Why after compositing and not per tile: OIDN looks at a neighbourhood of every pixel, so
-denoising rectangles one by one would seam at their edges. Every render mode (gold,
-selective, uniform, adaptive) goes through this one function with the same settings, so
-comparisons stay fair: path-traced images at 16-64 samples are dominated by noise (two
-gold renders with different seeds differ by mean FLIP ~0.17 at 16 spp), which is not what
-an artist looks at; after denoising they differ by ~0.045.
-
-OIDN is called directly from the library Blender ships (``oidn_library``), set up as the
-compositor's Denoise node sets it up (Prefilter Fast, Quality High, HDR), with the same
-result bit for bit (tests/test_denoise.py). Going through the compositor (a temporary scene
-rendered for its compositing, the fallback where the library cannot be loaded) would make
-Cycles sync the rendering scene again at its next render: a whole octree build on
-heterogeneous fog, in the middle of a guided render or between an animation's frames.
-
-Prefilter "Fast" (every mode's, and the converged reference's): the albedo and normal guides
-are taken as they are rather than denoised first (OIDN's cleanAux off: it denoises them along
-with the image). Measured on the road at 512x288 from 4 samples, against a denoised 64-sample
-frame: Fast 0.25 s for mean FLIP 0.042, Accurate (Cycles' default) 1.6 s for 0.038, no
-guides 0.25 s for 0.042 but softer edges on textured surfaces.
-
-``prefilter_guides`` (``--estimator auto``'s choice, so guided's and the panel's recommended
-mode's): in fog Cycles writes the guides at the first scattering event, so they are as noisy
-as the image, and that noise, correlated with the image's, is what OIDN then keeps as detail.
-Denoised first (quality Balanced: as good as High or better on balls_a and statue, within
-1-2 % of it on road and balls_b, for 40-60 % of its time), they lower mean FLIP at equal
-samples by 2-27 % (16 spp,
-medians of 3 seeds: road 0.0400 -> 0.0392, balls_a 0.0375 -> 0.0274, balls_b 0.0504 ->
-0.0473, statue 0.0442 -> 0.0409; 32 spp: 2-8 %) for 0.3-0.45 s at 256x192 and 1.1 s at
-512x288 on 2 cores (``bench/bench_denoise_guides.py``). Guides from a surface-only render, or
-none, helped some scenes and hurt road (README, "Denoising guides in fog").
-
-Light too strong for 32-bit floats: infinite or NaN values are set to 0 first, as Cycles
-sets a non-finite sample (``core.sampling.finite_pixels``; one Inf spreads over OIDN's
-output). And OIDN's HDR auto-exposure sums each bin's luminance in 32-bit floats, so a frame
-whose values reach about 1e36 (an emitter of 1e37 seen through fog) comes back all black: such
-a frame is scaled by a power of two (exact) to at most ``OIDN_PEAK`` before and back after.
-"""
+After compositing, never per tile: OIDN looks at a neighbourhood of every pixel, so
+rectangles denoised one by one would seam. Every mode goes through this one function, so
+comparisons stay fair. OIDN is called directly from the library Blender ships
+(``oidn_library``), set up as the compositor's Denoise node (Prefilter Fast, Quality High,
+HDR), bit for bit the same; going through the compositor would make Cycles sync the scene
+again at its next render. ``prefilter_guides`` (auto's choice) denoises the albedo and normal
+guides first, which in fog are as noisy as the image (docs/performance.md, "Denoising guides
+in fog"). Non-finite values are set to 0 first, and a frame too bright for OIDN's 32-bit
+auto-exposure is scaled by a power of two before and back after (``OIDN_PEAK``)."""
 from __future__ import annotations
 
 import shutil

@@ -1,19 +1,11 @@
 """Split a frame's tile plan between farm tasks so that every task costs about the same.
 
-A farm job cannot know the rectangles of a frame when it is submitted: they come from the
-director maps, which the job's first step computes. So the job has a fixed number K of tile
-tasks per frame, and each task takes its share of the plan with ``plan_group`` once the plan
-exists. Every task computes the same partition (it depends only on the plan and K), so no
-two tasks render the same rectangle and together they render all of them; a task whose
-group is empty (fewer rectangles than tasks) has nothing to do.
-
-The cost of a rectangle is the plan's own cost model (``core.sampling.tile_plan.split_tile``): its
-pixels times its samples, plus ``render_cost``, the fixed price of one Cycles render in
-pixel-samples. The partition is the longest-processing-time rule (Graham 1969): rectangles
-from the most to the least expensive, each to the group that has cost least so far. Its
-largest group is at most 4/3 of the best possible one, and much closer when the plan has
-many small rectangles, as selective plans do.
-"""
+The rectangles come from the director maps, which the job computes after it is submitted, so
+a job has a fixed number K of tile tasks per frame and each takes its share with
+``plan_group`` once the plan exists; every task computes the same partition, so together they
+render each rectangle once. A rectangle costs its pixels times its samples plus
+``render_cost`` (the plan's own model); the partition is the longest-processing-time rule
+(Graham 1969), whose largest group is at most 4/3 of the best possible."""
 from __future__ import annotations
 
 import heapq

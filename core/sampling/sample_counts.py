@@ -129,7 +129,7 @@ def prefilter_pays(count_plain: int, count_prefiltered: int) -> bool:
     denoise should spend the prefilter's time on its denoising guides instead, rendering
     ``count_prefiltered``: yes unless that takes it below a power of two the plain denoise
     reaches. The prefilter bought more than its time on auto's curve at 4-32 spp (balls_a,
-    balls_b, statue: 0.92-1.68x, README "Denoising guides in fog"), but with blue noise a
+    balls_b, statue: 0.92-1.68x, docs/performance.md, "Denoising guides in fog"), but with blue noise a
     count just below a power of two renders worse than the power of two below it (balls_a:
     16 spp 0.0377, 18-22 spp 0.0421-0.0476): street's range at uniform 16 spp's time fell
     from 16 to 12-13 spp a frame for the prefilter's 0.3 s, 1.10x over uniform to 1.00x.

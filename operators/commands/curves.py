@@ -1,17 +1,11 @@
 """``xsl-render curves SCENE.blend --out DIR``: time-quality curves and equal-quality speedups.
 
-Renders uniform sampling at 1/16 .. 1x the ceiling (the point at the ceiling is the gold
-standard), Cycles' adaptive sampling at three noise thresholds, Cycles' path guiding, XS and
-XSL at four ceilings, all at one resolution, denoised alike, each timed as a whole and
-compared with the converged reference (``xsl-render reference``, cached). Writes
-DIR/curves.json, DIR/curves.png and DIR/report.html and prints the table. Resumable:
-finished runs in DIR are reused.
-
-``--frames 1-24``: every run renders all those frames in one Cycles session, as ``render
---frames`` does (its time the whole run's, one scene sync), each frame compared with that
-frame's reference; a run's errors are the means over its frames, beside its sequence's
-flicker (``addon.validation.curves_runner``).
-"""
+Uniform at 1/16 .. 1x the ceiling (the last is the gold standard), Cycles' adaptive at three
+thresholds, path guiding, XS and XSL at four ceilings, at one resolution, denoised alike,
+each timed whole and compared with the converged reference; DIR/curves.json, curves.png and
+report.html, and the table printed. Finished runs in DIR are reused. With ``--frames`` every
+run renders the frames in one Cycles session, each frame against its own reference
+(``addon.validation.curves_runner``)."""
 from __future__ import annotations
 
 import argparse

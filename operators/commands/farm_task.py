@@ -1,33 +1,13 @@
-"""``xsl-render farm-task maps|tiles|composite|guided``: the steps of a farm job (``xsl-render farm``).
+"""``xsl-render farm-task maps|tiles|composite|guided``: the steps of a farm job (``xsl-render
+farm``), which the job template calls.
 
-The job template calls these; a person rarely does. Each takes one frame (``--frame N``) or
-a chunk of frames (``--frames 1-8``, ``--frames 9,11,15-17``: what the template's
-``{{Task.Param.Frame}}`` expands to) and renders a chunk's frames one after another in one
-Blender process, Cycles syncing the scene once. Each is safe to run again: finished, current
-results (a frame's plan, a rectangle, a finished frame) are kept (``core.farm.files``), so a
-crashed or cancelled job resumes, rendering only what a killed task had not finished.
-
-    farm-task maps SCENE.blend --frame N|--frames F --output DIR --scene-name S --mode xs|xsl
-        --max-spp N --resolution WxH [map options] [tile options]
-        -> DIR/work/frame_NNNN/maps/ and plan.json of each frame
-    farm-task tiles SCENE.blend --frame N|--frames F --output DIR --group G --groups K
-        -> DIR/work/frame_NNNN/tiles/<rectangle>.exr + .json for the rectangles of task G of K
-    farm-task composite --frame N|--frames F --output DIR [--groups K]
-        -> DIR/frame_NNNN.exr, frame_NNNN_spp.exr/.png, frame_NNNN.json
-    farm-task guided SCENE.blend --frame N|--frames F --output DIR --scene-name S --resolution WxH
-        --time-budget SECONDS [--max-spp N (0: no ceiling)] [--importance none|x|xs|xsl]
-        [--pilot-fraction F] [--guided-exponent Y] [--level-ratio R] [--tile-size N] [--seed N]
-        [map options]
-        -> the same files as composite, each frame rendered with the guided sampler within
-           the time budget
-
-maps, tiles and guided take ``--device CPU|GPU`` (the job's Device; default: the scene's).
-Every step prints ``openjd_progress: N`` (over the whole chunk) and ``openjd_status: text``
-lines as it goes, which a farm shows in its monitor, and one line per frame at the end
-(rendered now or already done). A cancelled task (SIGTERM, the template's
-NOTIFY_THEN_TERMINATE) removes its temporaries and exits 143 (``operators/signals.py``):
-what it finished stays, nothing half-written does.
-"""
+Each takes a frame (``--frame N``) or a chunk (``--frames 1-8``, what the template's
+``{{Task.Param.Frame}}`` expands to) and renders its frames in one Blender process: ``maps``
+(director maps and tile plan per frame), ``tiles`` (task G of K's rectangles), ``composite``
+(the frame's EXR, samples and record) and ``guided`` (whole frames within a time budget).
+Each is safe to run again: current results are kept (``core.farm.files``). Every step prints
+Open Job Description's progress and status lines; a cancelled task exits 143 with nothing
+half-written."""
 from __future__ import annotations
 
 import sys
