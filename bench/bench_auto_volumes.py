@@ -21,7 +21,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_denoise_guides import errors  # noqa: E402
 from bench_estimator import ROOT, SIZES, chosen_scenes, scene_arguments  # noqa: E402
-from performance_doc import HEADLINE, HEADLINE_COUNTS, HEADLINE_HEADER, speedup_text, write_rows, write_section  # noqa: E402
+from performance_doc import (HEADLINE, HEADLINE_COUNTS, HEADLINE_HEADER, speedup_text,  # noqa: E402
+                             write_bench_output, write_rows)
 
 SCENES = ("road", "balls_a", "balls_b", "statue", "street")
 COUNTS = (None, *HEADLINE_COUNTS)           # None: the scene's own samples
@@ -133,9 +134,8 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_auto_volumes.txt").write_text("\n".join(lines) + "\n")
     if not args.tiny:
-        command = "bench/bench_auto_volumes.py " + " ".join(argv if argv is not None else sys.argv[1:])
-        write_section("auto_volumes", f"`{command.strip()}`\n\n```\n" + "\n".join(lines) + "\n```",
-                      title="Auto Volumes in F12 (bench_auto_volumes.py)")
+        write_bench_output("auto_volumes", "Auto Volumes in F12 (bench_auto_volumes.py)",
+                           "bench_auto_volumes.py", argv, lines)
         write_rows(HEADLINE, HEADLINE_HEADER, rows, note=HEADLINE_NOTE)
     return 0
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_estimator import ROOT, SIZES, SPEEDUP_NOTE, chosen_scenes, scene_arguments, speedup_cell  # noqa: E402
-from performance_doc import write_section  # noqa: E402
+from performance_doc import write_bench_output  # noqa: E402
 
 SCENES = ("road", "balls_a", "balls_b", "statue")
 CONTENDERS = ("guided", "time_limit", "afforded")
@@ -188,9 +188,8 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_guided_choice.txt").write_text("\n".join(lines) + "\n")
     if not args.tiny:
-        command = "bench/bench_guided_choice.py " + " ".join(argv if argv is not None else sys.argv[1:])
-        write_section("guided_choice", f"`{command.strip()}`\n\n```\n" + "\n".join(lines) + "\n```",
-                      title="How a time budget is spent (bench_guided_choice.py)")
+        write_bench_output("guided_choice", "How a time budget is spent (bench_guided_choice.py)",
+                           "bench_guided_choice.py", argv, lines)
     return 0
 
 

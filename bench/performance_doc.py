@@ -56,6 +56,12 @@ def write_section(name: str, body: str, path: Path = PERFORMANCE, title: str | N
         fill_readme()
 
 
+def write_bench_output(name: str, title: str, script: str, argv, lines: list[str]) -> None:
+    """Section ``name`` becomes a bench's printed ``lines`` under the command that made them."""
+    command = f"bench/{script} " + " ".join(sys.argv[1:] if argv is None else argv)
+    write_section(name, f"`{command.strip()}`\n\n```\n" + "\n".join(lines) + "\n```", title=title)
+
+
 def _table(header, rows) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows])

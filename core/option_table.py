@@ -20,8 +20,10 @@ MAX_N = 100
 MAX_SIGMA_BASE = 100.0
 #: The longest time budget accepted: a week (anything longer is a typo).
 MAX_TIME_BUDGET = 7 * 24 * 3600.0
-#: How two director maps combine (the paper's section 4.3).
-OPERATORS = ("add", "multiply")
+#: How two director maps combine (the paper's section 4.3), with what each does.
+_OPERATOR_CHOICES = (("add", "Add", "Weighted sum: either map draws samples (the paper's choice)"),
+                     ("multiply", "Multiply", "Weighted product: a pixel needs both to draw samples"))
+OPERATORS = tuple(choice[0] for choice in _OPERATOR_CHOICES)
 #: Director maps a time budget's samples can be weighed by.
 IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
 #: Cycles' devices a farm job renders on.
@@ -187,11 +189,7 @@ OPTIONS: dict[str, Option] = {option.name: option for option in (
            "How much eye-catching detail (the S map) draws samples", low=0.0, high=10.0,
            soft_high=1.0, farm="Ws"),
     Option("xs_op", "choice", "add", "Fog and Saliency (XS operator)",
-           "How the fog and saliency maps combine into XS",
-           choices=_choices(("add", "Add", "Weighted sum: either map draws samples (the paper's "
-                             "choice)"),
-                            ("multiply", "Multiply", "Weighted product: a pixel needs both to draw "
-                             "samples")), farm="XsOp"),
+           "How the fog and saliency maps combine into XS", choices=_OPERATOR_CHOICES, farm="XsOp"),
     Option("wxs", "float", 0.5, "Fog and Saliency Weight (w_xs)",
            "How much the XS map steers the samples of XSL", low=0.0, high=10.0, soft_high=1.0,
            farm="Wxs"),
@@ -199,11 +197,7 @@ OPTIONS: dict[str, Option] = {option.name: option for option in (
            "How much the glow around visible lights (the L map) draws samples", low=0.0,
            high=10.0, soft_high=1.0, farm="Wl"),
     Option("xsl_op", "choice", "add", "With Light Glow (XSL operator)",
-           "How XS and the light map combine into XSL",
-           choices=_choices(("add", "Add", "Weighted sum: either map draws samples (the paper's "
-                             "choice)"),
-                            ("multiply", "Multiply", "Weighted product: a pixel needs both to draw "
-                             "samples")), farm="XslOp"),
+           "How XS and the light map combine into XSL", choices=_OPERATOR_CHOICES, farm="XslOp"),
     Option("light_auto", "bool", True, "Glow per Light (auto n, sigma_base)",
            "Size each light's glow from the fog between it and the camera, on the paper's "
            "ranges (n 4-20, sigma_base 1-10)", flag=None),
