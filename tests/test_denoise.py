@@ -79,7 +79,7 @@ def test_direct_oidn_is_the_compositors_denoise_bit_for_bit(blender):
 
 def test_prefiltered_guides_leave_less_error_in_fog(fog):
     """In fog Cycles writes the albedo and normal at the first scattering event, as noisy as
-    the image: denoised first (auto's choice), they let OIDN come closer to the converged
+    the image: denoised first (the Accurate prefilter), they let OIDN come closer to the converged
     frame, on mean FLIP as the benches measure it, than the guides as rendered."""
     from xsl_render.addon.cycles.denoise import denoise
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
@@ -131,3 +131,20 @@ def test_a_denoise_between_renders_keeps_the_synced_scene(blender):
         renderer.render((0, 8, 0, 8), 2)
         again = time.perf_counter() - started
     assert again < 0.25 * sync, (again, sync)
+
+
+@pytest.mark.parametrize("prefilter, prefiltered", [("ACCURATE", True), ("FAST", False), ("NONE", False)])
+@pytest.mark.parametrize("estimator", ["scene", "auto"])
+def test_every_run_denoises_as_the_files_own_denoiser(fog, prefilter, prefiltered, estimator):
+    """The guides are prefiltered where the file's denoiser prefilters them (Blender 5's
+    default, Accurate) and only there, whatever the estimator: a comparison with the file
+    measures the estimator, not a denoise of its own."""
+    from xsl_render.addon.cycles import selective_render as sr
+    from xsl_render.addon.maps.estimator_choice import with_estimator_choice
+    from xsl_render.core.sampling.render_options import RenderOptions
+
+    fog.cycles.denoising_prefilter = prefilter
+    options = with_estimator_choice(fog, RenderOptions(max_spp=2, estimator=estimator).check(), 2)
+    stats = sr.render_uniform(fog, options, spp=2).stats
+    assert stats.denoise_guides["prefiltered"] is prefiltered
+    assert fog.cycles.denoising_prefilter == prefilter

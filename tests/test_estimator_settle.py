@@ -112,23 +112,6 @@ def test_choices_without_predictions_stay_as_they_are(choice):
     assert settled_for(choice, 4) is choice
 
 
-@pytest.mark.parametrize("choice, prefiltered", [
-    (_auto(16), True),
-    (provisional_choice(_auto(4096)), True),
-    (settled_for(_auto(64), 4), True),
-    (fixed_choice("scene", None), False),
-    (fixed_choice("unbiased", None), False),
-    (fixed_choice("biased", 2.0), False),
-])
-def test_auto_alone_denoises_with_prefiltered_guides(choice, prefiltered):
-    """Auto's every choice (settled or provisional too) prefilters the denoising guides; the
-    fixed ones denoise as every baseline does. The record and the description say so."""
-    assert choice.prefilter_guides is prefiltered
-    assert choice.to_dict()["prefilter_guides"] is prefiltered
-    assert ("guides prefiltered" in choice.describe()) is prefiltered
-    json.dumps(choice.to_dict())
-
-
 @pytest.mark.blender
 @pytest.mark.render
 def test_guided_switches_to_the_settled_estimator_and_restores_the_scene(blender, monkeypatch):

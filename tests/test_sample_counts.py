@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from xsl_render.core.sampling.sample_counts import (column_count, power_of_two_within, prefilter_pays,
+from xsl_render.core.sampling.sample_counts import (column_count, power_of_two_within,
                                                     sobol_friendly, still_count)
 
 
@@ -43,11 +43,3 @@ def test_a_still_is_raised_to_the_power_of_two_its_overrun_reaches(affordable, a
     assert still_count(affordable, allowance, ceiling) == count
 
 
-@pytest.mark.parametrize("plain, prefiltered, pays", [
-    (16, 16, True), (32, 32, True),          # free where the count stays
-    (16, 13, False), (32, 24, False),        # not bought with a power of two
-    (8, 4, False),
-    (28, 26, True), (13, 12, True),          # between powers of two: the prefilter gains more
-    (20, 16, True)])                         # (and down to the power of two below is no loss)
-def test_the_guides_prefilter_is_not_bought_with_a_power_of_two(plain, prefiltered, pays):
-    assert prefilter_pays(plain, prefiltered) is pays

@@ -57,7 +57,7 @@ def main(argv=None) -> int:
             record.unlink()
             print(f"removed the older entry {record.stem}")
     size = entry.path.stat().st_size / 1e6
-    print(f"wrote {entry.path.relative_to(ROOT)} ({size:.2f} MB) in {stats['reference_wall_s']:.0f} s")
+    print(f"wrote {entry.path.relative_to(ROOT)} ({size:.2f} MB) in {stats.seconds:.0f} s")
     return 0
 
 

@@ -18,7 +18,8 @@ from ...core.progress import Steps
 from ...core.sampling.composite import Compositor, crop, render_window
 from ...core.sampling.render_options import EXACT_MARGIN, RenderOptions
 from ..scene.state import preserved_scene
-from .selective_render import RenderOutcome, render_stats, tile_entry, finish_image, prepare_render
+from .selective_render import (RenderOutcome, finish_image, guide_prefilter, prepare_render, render_stats,
+                               tile_entry)
 from .tile_render import CyclesWindowRenderer
 
 #: Pixel-samples per band: a few seconds of fog on two CPU cores, so ESC answers quickly.
@@ -59,7 +60,7 @@ def gold_band_steps(scene, options: RenderOptions, budget: int = BAND_PIXEL_SAMP
         phases = {"maps": 0.0, "renders": time.perf_counter() - started - waited}
         image, samples = compositor.result()
         image, denoise_guides, non_finite = finish_image(
-            image, None if guides is None else guides.result()[0], options, phases)
+            image, None if guides is None else guides.result()[0], options, phases, guide_prefilter(scene))
         stats = render_stats("gold", scene, options, width, height, samples, phases, tiles, warnings,
                              renderer.sync_seconds, denoise_guides, non_finite)
     stats.bands = {"rows": rows, "count": len(bands), "margin": EXACT_MARGIN,

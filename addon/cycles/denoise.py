@@ -3,12 +3,15 @@
 After compositing, never per tile: OIDN looks at a neighbourhood of every pixel, so
 rectangles denoised one by one would seam. Every mode goes through this one function, so
 comparisons stay fair. OIDN is called directly from the library Blender ships
-(``oidn_library``), set up as the compositor's Denoise node (Prefilter Fast, Quality High,
-HDR), bit for bit the same; going through the compositor would make Cycles sync the scene
-again at its next render. ``prefilter_guides`` (auto's choice) denoises the albedo and normal
-guides first, which in fog are as noisy as the image (docs/performance.md, "Denoising guides
-in fog"). Non-finite values are set to 0 first, and a frame too bright for OIDN's 32-bit
-auto-exposure is scaled by a power of two before and back after (``OIDN_PEAK``)."""
+(``oidn_library``), set up as the compositor's Denoise node (Quality High, HDR, the file's
+prefilter), bit for bit the same; going through the compositor would make Cycles sync the
+scene again at its next render. The guides' prefilter follows the file's own denoiser in every
+mode and in the converged reference (``selective_render.guide_prefilter``: Accurate, Blender
+5's default, denoises the albedo and normal guides first, which in fog are as noisy as the
+image), so a comparison with the file measures the estimator, not the denoise. Non-finite
+values are set to 0 first, and a frame too bright for OIDN's 32-bit auto-exposure is scaled by
+a power of two before and back after (``OIDN_PEAK``).
+"""
 from __future__ import annotations
 
 import shutil
@@ -18,19 +21,19 @@ from pathlib import Path
 import numpy as np
 
 from ...core.sampling.finite_pixels import zero_non_finite
-from .oidn_library import QUALITY_BALANCED, QUALITY_HIGH
+from .oidn_library import QUALITY_HIGH
 from .oidn_library import load as load_oidn
 from .render import read_exr_parts
 
 _SCENE = "xsl_render denoise"
 #: What prefiltered guides cost over the plain denoise, as a multiple of it (measured: 4x at
-#: 256x192 and 512x288, the prefilter's two filters at Balanced beside the main one at High).
+#: 256x192 and 512x288, the prefilter's two filters beside the main one).
 PREFILTER_COST = 4.0
 #: The denoising procedure's version: part of the converged reference's cache key
 #: (``core.validation.reference``). Bump it with any change to what ``denoise`` does
 #: (settings, prefilter, guides), then regenerate the shipped reference
 #: (tools/regenerate_reference.py); a test compares the shipped entry's key.
-DENOISE_VERSION = "oidn-hdr-fast-prefilter-1"
+DENOISE_VERSION = "oidn-hdr-file-prefilter-2"
 #: The largest value a frame goes to OIDN with (2^100; a frame up to 2^120 denoised within
 #: 2e-6 of itself at 1 in a test, 1e37 came back black). Frames below it are untouched.
 OIDN_PEAK = 2.0 ** 100
@@ -62,8 +65,8 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
 
     ``rgba`` is (H, W, 4) scene-linear; alpha passes through unchanged. Returns float32
     (H, W, 4). ``prefilter_guides``: the guides are denoised first, each by OIDN's filter on
-    its own at quality Balanced, and then taken as clean (OIDN's and Blender's "Accurate"
-    prefilter; auto's choice, see ``PREFILTER_COST``).
+    its own, and then taken as clean (OIDN's and Blender's "Accurate" prefilter, the file's
+    choice: ``selective_render.guide_prefilter``).
     """
     rgba = zero_non_finite(rgba)[0]
     albedo = None if albedo is None else zero_non_finite(albedo, whole_frame=False)[0]
@@ -80,8 +83,8 @@ def denoise(rgba: np.ndarray, albedo: np.ndarray | None = None,
         normal = None if normal is None else normal[::-1]
         clean = prefilter_guides and albedo is not None
         if clean:
-            albedo = library.prefilter(albedo, "albedo", QUALITY_BALANCED)
-            normal = None if normal is None else library.prefilter(normal, "normal", QUALITY_BALANCED)
+            albedo = library.prefilter(albedo, "albedo", QUALITY_HIGH)
+            normal = None if normal is None else library.prefilter(normal, "normal", QUALITY_HIGH)
         out = library.denoise(rgba[::-1], albedo, normal, hdr=True, clean_aux=clean,
                               quality=QUALITY_HIGH)[::-1]
     else:

@@ -6,10 +6,11 @@ a pilot (the whole frame at a quarter of its resolution, 1 and a few samples: th
 price a sample and so the count the budget affords; auto's choice is settled for that count,
 ``settled_for``), then the final pass in three columns of the frame, each paced by what
 those before it cost at full resolution, a count up to 1.5x a power of two rendered at it
-(``sobol_friendly``), and one denoise of the whole frame. A later frame of a range knows what
-a sample costs and renders the whole frame once at the frame before's count while it fits
-(``SequenceBudget``); the first frame of a range pilots at full resolution and renders whole.
-What each choice measured: docs/performance.md, "Guided"."""
+(``sobol_friendly``), and one denoise of the whole frame as the file's denoiser would. A later
+frame of a range knows what a sample costs and renders the whole frame once at the frame
+before's count while it fits (``SequenceBudget``); the first frame of a range pilots at full
+resolution and renders whole. What each choice measured: docs/performance.md, "Guided".
+"""
 from __future__ import annotations
 
 import time
@@ -20,8 +21,7 @@ import numpy as np
 from ...core.progress import ProgressCallback, Steps, run_steps
 from ...core.sampling.guided_plan import (BudgetPacer, FinalPass, GuidedOptions, error_scores,
                                           plan_final_pass, tile_means)
-from ...core.sampling.denoise_guides import guides_are_noisy
-from ...core.sampling.sample_counts import (BUDGET_OVERRUN, column_count, prefilter_pays, sobol_friendly,
+from ...core.sampling.sample_counts import (BUDGET_OVERRUN, column_count, sobol_friendly,
                                             still_count)
 from ...core.sampling.sequence_budget import SequenceBudget
 from ...core.sampling.pass_merge import PassAccumulator
@@ -30,7 +30,7 @@ from ...core.sampling.tile_plan import Rect, check_director_map, tile_windows
 from ...core.sampling.volume_estimator import settled_for, provisional_choice
 from ...core.tonemap import standard_view
 from ..scene.state import preserved_scene
-from .selective_render import (RenderOutcome, apply_estimator, finish_image, prepare_render, render_stats,
+from .selective_render import (RenderOutcome, apply_estimator, finish_image, guide_prefilter, prepare_render, render_stats,
                                tile_entry)
 from .denoise import PREFILTER_COST
 from .tile_render import CyclesWindowRenderer
@@ -162,12 +162,11 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
             tiles.append(tile_entry(window, piece) | {"pass": "final"})
             return piece.seconds - piece.sync_seconds
 
-        # The final denoise's time, set aside before the final pass: plain, or with auto's
-        # prefiltered guides where they are noisy and the prefilter does not cost the frame
-        # its power of two (``prefilter_pays``). A later frame of a range knows both from
-        # the frames before it.
+        # The final denoise's time, set aside before the final pass: with the guides
+        # prefiltered where the file's denoiser prefilters them (``guide_prefilter``), else
+        # plain. A later frame of a range knows both from the frames before it.
         reserve = _DENOISE_SECONDS_PER_PIXEL * width * height if options.denoise else 0.0
-        may_prefilter = options.denoise and options.volume_estimator().prefilter_guides
+        may_prefilter = options.denoise and guide_prefilter(scene)
         if pace is not None and pace.denoise_plain_s is not None:
             reserve = pace.denoise_plain_s
         prefilter_reserve = reserve * PREFILTER_COST
@@ -176,12 +175,9 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         allow_prefilter = False
         reduce = 1 if whole_start else pilot_reduce(width, height)
 
-        def denoise_plan(count_for, noisy: bool) -> tuple[float, bool]:
-            """(seconds set aside for the final denoise, whether it may prefilter the guides);
-            ``count_for(seconds)`` is the count the frame renders with that set aside."""
-            if may_prefilter and noisy and prefilter_pays(count_for(reserve), count_for(prefilter_reserve)):
-                return prefilter_reserve, True
-            return reserve, False
+        def denoise_plan() -> tuple[float, bool]:
+            """(seconds set aside for the final denoise, whether it prefilters the guides)."""
+            return (prefilter_reserve, True) if may_prefilter else (reserve, False)
 
         def first_column_count(affordable: float, frame_sample_s: float, sequence: int) -> int:
             """A still's count (its first column's): raised to the power of two above it where
@@ -247,8 +243,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                     return pace.steady_count(max(0.0, left) / (rate * width * height), options.max_spp,
                                              rate * width * height, renderer.sequence())
 
-                # Noisy unless the frame before measured its guides clean.
-                denoise_reserve, allow_prefilter = denoise_plan(steady, pace.guides_noisy is not False)
+                denoise_reserve, allow_prefilter = denoise_plan()
                 spp = steady(denoise_reserve)
                 final = FinalPass([Rect(0, height, 0, width, spp)], np.full(len(windows), float(spp)), flat=True)
                 paused = clock.pause()
@@ -316,9 +311,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
                         return pace.steady_count(affordable, options.max_spp, frame_sample_s, renderer.sequence())
                     return first_column_count(affordable, frame_sample_s, renderer.sequence())
 
-                pilot_noisy = (may_prefilter and pilot.guides is not None
-                               and guides_are_noisy(pilot.guides[..., :3]))
-                denoise_reserve, allow_prefilter = denoise_plan(first_count, pilot_noisy)
+                denoise_reserve, allow_prefilter = denoise_plan()
                 if options.denoise:
                     denoise_reserve = max(denoise_reserve, _DENOISE_RATIO * scoring_denoise)
                 # The final pass: planned for the time left once the final denoise is set aside,
@@ -386,7 +379,7 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
         samples = image.samples.astype(np.float32)
         phases["composite"] = clock.now() - began
         merged, denoise_guides, non_finite = finish_image(merged, merged_guides if options.denoise else None,
-                                                          options, phases, allow_prefilter)
+                                                          options, phases, may_prefilter, allow_prefilter)
         if pace is not None and denoise_guides is not None:
             pace.observe_denoise(phases["denoise"], denoise_guides["prefiltered"], denoise_guides["noisy"])
         if used != options.volume_estimator():      # (a fixed choice is a new object each call)

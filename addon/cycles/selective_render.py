@@ -156,13 +156,13 @@ def render_rect(renderer: CyclesWindowRenderer, rect: Rect, options: RenderOptio
 
 
 def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOptions,
-                 phases: dict, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None, int]:
+                 phases: dict, prefilter: bool, allow_prefilter: bool = True) -> tuple[np.ndarray, dict | None, int]:
     """The frame as delivered: its infinite or NaN pixels set to 0 (``core.sampling.
     finite_pixels``: InputError when all are), denoised once, whole (``options.denoise``),
-    timed as a phase; where auto may prefilter the denoising guides, what it decided (their
-    noise, whether that is noisy, whether they were prefiltered: ``RenderStats.
-    denoise_guides``), else None; and the number of pixels set to 0. ``allow_prefilter``
-    False: the caller could not afford the prefilter (``guided``)."""
+    timed as a phase, its guides denoised first where the file's denoiser does so
+    (``prefilter``: ``guide_prefilter``); how noisy the guides were and whether they were
+    prefiltered (``RenderStats.denoise_guides``), and the number of pixels set to 0.
+    ``allow_prefilter`` False: the caller could not afford the prefilter (``guided``)."""
     image, non_finite = zero_non_finite(image)
     if not options.denoise:
         return image, None, non_finite
@@ -170,18 +170,22 @@ def finish_image(image: np.ndarray, guides: np.ndarray | None, options: RenderOp
     from .denoise import denoise
 
     started = time.perf_counter()
-    # Auto denoises the guides first where most of the frame's are noisy (in fog they are
-    # written at the first scattering event): ``core.sampling.denoise_guides``.
     record = None
-    if guides is not None and options.volume_estimator().prefilter_guides:
+    if guides is not None:
         noise = guide_noise(guides[..., :3])
-        noisy = noise > NOISY_GUIDE_MEDIAN
-        record = {"noise": noise, "noisy": noisy, "prefiltered": noisy and allow_prefilter}
+        record = {"noise": noise, "noisy": noise > NOISY_GUIDE_MEDIAN, "prefiltered": prefilter and allow_prefilter}
     out = denoise(image, None if guides is None else guides[..., :3],
                   None if guides is None else guides[..., 3:6],
                   prefilter_guides=bool(record and record["prefiltered"]))
     phases["denoise"] = time.perf_counter() - started
     return out, record, non_finite
+
+
+def guide_prefilter(scene) -> bool:
+    """Whether the file's denoiser denoises its albedo and normal guides first: OIDN's
+    Accurate prefilter (Blender 5's default), which every mode follows, so that a run is
+    denoised as the artist's own render would be."""
+    return getattr(scene.cycles, "denoising_prefilter", "ACCURATE") == "ACCURATE"
 
 
 def render_selective(scene, director_map: np.ndarray, options: RenderOptions,
@@ -244,7 +248,7 @@ def selective_steps(scene, director_map: np.ndarray, options: RenderOptions, mod
         image, samples = compositor.result()
         phases["composite"] = composite_s + time.perf_counter() - started
         image, denoise_guides, non_finite = finish_image(
-            image, None if guides is None else guides.result()[0], options, phases)
+            image, None if guides is None else guides.result()[0], options, phases, guide_prefilter(scene))
         stats = render_stats(mode, scene, options, width, height, samples, phases, tiles, warnings,
                              renderer.sync_seconds, denoise_guides, non_finite)
     stats.plan, stats.ideal_speedup = plan.to_dict(), plan.ideal_speedup
@@ -286,7 +290,8 @@ def _single_render(scene, options: RenderOptions, mode: str, progress: ProgressC
                                        time_limit=time_limit, on_sample=on_sample)
             tiles.append(tile_entry((0, height, 0, width), rendered))
         phases["renders"] = time.perf_counter() - started
-        image, denoise_guides, non_finite = finish_image(rendered.pixels, rendered.guides, options, phases)
+        image, denoise_guides, non_finite = finish_image(rendered.pixels, rendered.guides, options, phases,
+                                                         guide_prefilter(scene))
         report.update(1.0, f"{mode}: done")
         per_pixel = np.broadcast_to(np.float32(rendered.samples), (height, width)).astype(np.float32)
         stats = render_stats(mode, scene, options, width, height, per_pixel, phases, tiles, warnings,

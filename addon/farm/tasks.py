@@ -135,6 +135,7 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
         else:
             todo.append((files, inputs))
     if todo:
+        from ..cycles.selective_render import guide_prefilter
         from ..maps.director_maps import compute_maps
 
         scene = _open(scene_path, scene_name, todo[0][0].frame, device)
@@ -152,7 +153,10 @@ def run_maps_task(scene_path: str | Path, scene_name: str, frames: Sequence[int]
             write_plan_record(files, inputs, plan, files.maps / f"{mode}.exr",
                               {"seconds": maps.info["seconds"], "warnings": maps.info.get("warnings", []),
                                "ray_cache_hit": bool(maps.info["x"]["cache"]["hit"]),
-                               "task": _task_record(frames)})
+                               "task": _task_record(frames),
+                               # The file's denoiser, which the composite denoises as (the
+                               # .blend's digest above covers it).
+                               "denoise_prefilter": guide_prefilter(scene)})
             outcomes[files.frame] = TaskOutcome(files.frame, 1, done_now=[files.stem],
                                                 seconds=time.perf_counter() - started)
             previous = files.maps

@@ -192,7 +192,7 @@ def light_path_predictor(scene, depsgraph, rays: CameraRays, geometry, media, se
     return LightPathPredictor(origins[kept], directions[kept], near[kept], far[kept], normals[kept],
                               np.full(len(kept), len(chosen) / len(kept)), media, kept_segments,
                               emitters, cast, rates=rates, max_steps=int(scene.cycles.volume_max_steps),
-                              clip=display_white(scene), rest=float(len(pixels) - len(chosen)))
+                              clip=display_white(scene))
 
 
 def _surface_normals(geometry, origins, directions, near, far, hit) -> np.ndarray:

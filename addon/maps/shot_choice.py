@@ -40,9 +40,8 @@ class ShotChoice:
 
 
 def applied(choice: EstimatorChoice) -> str:
-    """What a render with ``choice`` changes, in words. Blender's own denoiser denoises an
-    Auto Volumes render as the file sets it: the guide prefilter of ``--estimator auto``'s
-    own denoising (``EstimatorChoice.prefilter_guides``) is not part of it."""
+    """What a render with ``choice`` changes, in words (Blender's own denoiser denoises an
+    Auto Volumes render as the file sets it)."""
     return replace(choice, estimator="auto volumes").describe()
 
 

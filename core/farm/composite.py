@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..sampling.composite import Compositor
-from ..sampling.denoise_guides import guides_are_noisy
 from ..sampling.render_files import frame_attributes
 from .files import RECORD_FORMAT, FrameFiles, json_digest, load_plan, read_tile, valid_tile
 from .frame_outputs import FRAME_KIND, valid_frame_outputs, write_frame_outputs
@@ -31,9 +30,9 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
 
     ``groups`` (the job's tile tasks per frame) only adds how evenly they shared the work
     to the statistics. ``denoiser(rgba, albedo, normal, prefilter_guides)`` denoises the frame
-    when the plan's options ask for it, its guides prefiltered where the estimator is auto's
-    and they are noisy (``core.sampling.denoise_guides``; ``addon.cycles.denoise.denoise``,
-    passed in so this module needs no Blender).
+    when the plan's options ask for it, its guides prefiltered where the file's denoiser
+    prefilters them (the plan's record says; ``addon.cycles.denoise.denoise``, passed in so
+    this module needs no Blender).
     """
     started = time.perf_counter()
     record = load_plan(files)
@@ -70,7 +69,7 @@ def composite_frame(files: FrameFiles, groups: int | None = None,
             raise InputError("this frame is to be denoised, which needs Blender's denoiser")
         albedo_normal = guides.result()[0]
         tick = time.perf_counter()
-        prefilter = options.estimator == "auto" and guides_are_noisy(albedo_normal[..., :3])
+        prefilter = bool(record.data.get("denoise_prefilter", True))
         image = denoiser(image, albedo_normal[..., :3], albedo_normal[..., 3:], prefilter)
         denoise_seconds = time.perf_counter() - tick
     mode = record.mode

@@ -3,9 +3,8 @@
 Cycles' patterns stratify best at powers of two, and after denoising it shows: a count just
 above a power of two renders at it (``sobol_friendly``), one just below it is raised to it
 where the budget's slack reaches (``power_of_two_within``), the columns of a flat pass and
-the frames of a range hold one count (``column_count``, ``HOLD_RANGE``), and a frame's
-denoising-guide prefilter is not bought with a power of two (``prefilter_pays``). Plain
-numbers; the clock is read by the caller.
+the frames of a range hold one count (``column_count``, ``HOLD_RANGE``). Plain numbers; the
+clock is read by the caller.
 """
 from __future__ import annotations
 
@@ -122,23 +121,6 @@ def power_of_two_within(count: int, reach: float, ceiling: int) -> int:
         return count
     power = 1 << (top.bit_length() - 1)
     return max(power, count)
-
-
-def prefilter_pays(count_plain: int, count_prefiltered: int) -> bool:
-    """Whether a frame that would render ``count_plain`` samples per pixel with the plain
-    denoise should spend the prefilter's time on its denoising guides instead, rendering
-    ``count_prefiltered``: yes unless that takes it below a power of two the plain denoise
-    reaches. The prefilter bought more than its time on auto's curve at 4-32 spp (balls_a,
-    balls_b, statue: 0.92-1.68x, docs/performance.md, "Denoising guides in fog"), but with blue noise a
-    count just below a power of two renders worse than the power of two below it (balls_a:
-    16 spp 0.0377, 18-22 spp 0.0421-0.0476): street's range at uniform 16 spp's time fell
-    from 16 to 12-13 spp a frame for the prefilter's 0.3 s, 1.10x over uniform to 1.00x.
-    (Measured with the pure blue noise; the rounded sequence auto renders with since narrows
-    that gap, balls_a 12 spp 0.0329 against 16's 0.0276, which this rule has not been
-    measured against.)"""
-    if count_prefiltered >= count_plain:
-        return True
-    return count_plain & (count_plain - 1) != 0
 
 
 def still_count(affordable: float, allowance: float, ceiling: int, sequence: int = 0) -> int:

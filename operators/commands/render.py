@@ -1,14 +1,13 @@
 """``xsl-render render SCENE.blend --out FILE.exr``: the file rendered as Blender renders it (its
 samples, denoiser, compositor and outputs) with Auto Volumes (``--estimator scene``: without),
-``addon.blender_render``. With ``--mode``, the paper's renders and the baselines:
-``--mode gold|xs|xsl|uniform|adaptive --max-spp N`` and ``--mode guided --time-budget SECONDS``.
+``addon.blender_render``. With ``--mode``, the paper's renders and the baselines
+(``--mode gold|xs|xsl|uniform|adaptive [--max-spp N]``, counts defaulting to the scene's
+samples) and ``--mode guided --time-budget SECONDS``, every mode with auto's estimator unless
+``--estimator`` says otherwise.
 
-With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per
-pixel; the PNG's grey level is spp / max_spp, or spp / the most any pixel got for guided
-without a ceiling) and, with --stats, the run's statistics as JSON. A ``#`` run in FILE's
-name becomes the frame number; ``--frames START-END`` renders an animation
-(``render_animation.py``).
-"""
+With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel)
+and, with --stats, the run's statistics as JSON; a ``#`` run in FILE's name becomes the frame
+number, and ``--frames`` renders an animation (``render_animation.py``)."""
 from __future__ import annotations
 
 import sys
