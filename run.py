@@ -1,17 +1,15 @@
 #!/usr/bin/env python3
-"""Set up and run xsl_render from nothing: ``python3 run.py demo`` or ``python3 run.py test``.
+"""Set up and run xsl_render from nothing: ``python3 run.py build``, ``demo`` or ``test``.
 
-On first use (and whenever requirements.lock or pyproject.toml change) this creates
-``.venv`` next to this file, installs the pinned versions from requirements.lock and
-installs the project itself in editable mode, which puts the ``xsl-render`` command
-into ``.venv``. Then it does its job:
+On first use (and whenever requirements.lock or pyproject.toml change) it creates ``.venv``,
+installs the pinned versions and the project itself (the ``xsl-render`` command), then:
 
-    demo [ARGS...]   the main job on the bundled road scene (extra ARGS are passed on)
-    test [ARGS...]   the test suite: ``pytest`` on every core, then the tests marked timing
-                     alone; with ARGS, one ``pytest ARGS`` run
+    build [ARGS...]  the extension's zips, one per platform, in dist/ (tools/build_extension.py)
+    demo [ARGS...]   the main job on the bundled road scene
+    test [ARGS...]   the suite: pytest on every core, then the tests marked timing alone;
+                     with ARGS, one ``pytest ARGS`` run
 
-Only the Python standard library is used here, so any Python 3.11 can run it.
-"""
+Standard library only, so any Python 3.11 runs it."""
 from __future__ import annotations
 
 import hashlib
@@ -75,12 +73,14 @@ def ensure_browser() -> None:
 
 
 def main(argv: list[str]) -> int:
-    if not argv or argv[0] not in ("demo", "test"):
+    if not argv or argv[0] not in ("build", "demo", "test"):
         print(__doc__, file=sys.stderr)
         return 2
     ensure_venv()
     job, rest = argv[0], argv[1:]
-    if job == "demo":
+    if job == "build":
+        command = [str(venv_bin("python")), str(ROOT / "tools" / "build_extension.py"), *rest]
+    elif job == "demo":
         command = [str(venv_bin("xsl-render")), "demo", *rest]
     else:
         ensure_browser()

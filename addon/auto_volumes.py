@@ -2,26 +2,13 @@
 ``blender -b -f`` / ``-a``) renders its media with auto's choice for the frame's shot, and
 the artist's settings come back after every frame.
 
-Blender's render handlers (docs/auto_volumes.md: their order, and what Cycles sees):
-
-- ``render_init``: the job starts. Where the media stand still and memory allows, Cycles'
-  session is kept between frames (persistent data: the media's octree is built once).
-- ``render_pre``: the frame's shot is chosen for once (``addon.maps.shot_choice``: the same
-  choice for a frame however the range is split) and applied to the scene
-  (``selective_render.apply_estimator``) before Blender builds the frame's depsgraph; a
-  session kept from before is tagged where the choice changes what it synced. The choice
-  goes into the frame's EXR header (its stamp note, unless the stamp is burnt into the
-  image) and onto the log.
-- ``render_post``: the frame's settings go back; ``render_complete`` / ``render_cancel``: the
-  job's too, and what a render tagged is tagged again, so the viewport and a session the
-  artist keeps see the artist's settings.
-
-Whatever fails inside leaves the frame to render with the artist's own settings and prints
-a warning. The extension's own renders (tiles, snapshots) are left alone
-(``cycles.own_renders``). Outside Blender's main thread (a render started from the interface)
-Blender allows changing data only with the interface locked (Render › Lock Interface);
-without it the render keeps the file's settings and says so.
-"""
+Through Blender's render handlers (their order, and what Cycles sees: docs/auto_volumes.md):
+``render_init`` keeps Cycles' session between frames where the media stand still and memory
+allows; ``render_pre`` applies the shot's choice (``addon.maps.shot_choice``) before Blender
+builds the frame's depsgraph and records it in the frame's EXR header and the log;
+``render_post`` / ``render_complete`` / ``render_cancel`` put everything back. Whatever fails
+leaves the frame to render with the artist's settings and a warning; from the interface it
+acts only with Render › Lock Interface on."""
 from __future__ import annotations
 
 import sys
@@ -35,6 +22,7 @@ from ..core.sampling.shot_plan import shot_of
 from .cycles.own_renders import rendering_own
 from .cycles.sample_pattern import enable_debug_patterns
 from .cycles.selective_render import apply_estimator
+from .cycles.volume_settings import unsupported
 from .maps import shot_choice
 from .scene.animation import has_media, media_move
 from .scene.changes import ChangeRecord
@@ -43,10 +31,6 @@ from .scene.changes import ChangeRecord
 #: Blender holds free (the kept session holds about one frame's render data, which a scene's
 #: evaluated copy bounds; a rule of thumb, not a measurement).
 MEMORY_HEADROOM = 2.0
-#: The volume settings Blender must have for auto's choice (Blender 5: ray marching per scene,
-#: a step per material and per world).
-NEEDED_SETTINGS = (("scene", "volume_biased"), ("scene", "volume_step_rate"),
-                   ("material", "volume_step_rate"), ("world", "volume_step_size"))
 LOCK_INTERFACE = ("Auto Volumes needs Render › Performance › Lock Interface for a render started "
                   "from the interface (Blender lets a render change settings only then); this "
                   "render uses the file's own volume settings")
@@ -80,20 +64,6 @@ last_plans: dict[int, object] = {}
 _saved_ranges: dict[int, tuple[int, int]] = {}
 #: The last warning printed (for scripts and tests that look at it).
 last_warning = ""
-
-
-def unsupported() -> str:
-    """Why this Blender cannot render with auto's choice ("" where it can)."""
-    import bpy
-
-    owners = {"scene": bpy.types.Scene, "material": bpy.types.Material, "world": bpy.types.World}
-    for owner, name in NEEDED_SETTINGS:
-        cycles = owners[owner].bl_rna.properties.get("cycles")
-        if cycles is None:
-            return "Cycles is not enabled"
-        if name not in cycles.fixed_type.properties:
-            return f"this Blender's Cycles has no {owner} setting '{name}' (it needs Blender 5.0 or newer)"
-    return ""
 
 
 def enabled(scene) -> bool:

@@ -1,17 +1,11 @@
-"""Frame jobs: how one frame is rendered (maps, estimator, render), for a still and for a
-frame range alike; ranges render in one Cycles session and cast the camera rays once.
+"""Frame jobs: how one frame is rendered (maps, estimator, render), for a still and for a frame
+range alike, as steps (``core.progress``) the command line drives in one go and the panel one
+step per timer tick.
 
-The paper (4.1): the Z buffer "allows for instant recomputations of the X map if the
-description of the medium in the scene changes (such as dynamic fog or smoke)". Every
-frame's maps share one ray cache folder; its key is the camera and the geometry, so while
-only the medium is animated, frames 2..N reuse the rays of frame 1 and only integrate the
-new densities along them (a moving camera or object simply recasts them).
-
-The guided render's frame job (``guided_frame``) computes its importance map inside the
-frame's own time budget. Used by ``xsl-render render`` (and the batch entry), the farm's
-guided task and the panel's render operators, as steps (``core.progress``): the command line
-drives them in one go, the panel one step per timer tick.
-"""
+A range renders in one Cycles session and shares one ray cache keyed by the camera and the
+geometry, so while only the medium is animated later frames reuse the first frame's camera
+rays (the paper's "instant recomputation", 4.1). The guided render's frame job computes its
+importance map inside the frame's own time budget."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -163,7 +157,6 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 
     ``sequence``: the frames of one run share its time (``SequenceBudget``: each frame gets
     what the range has left per frame still to render, the scene sync outside it)."""
-    guided.check()
 
     def prepare(scene) -> Steps[tuple]:
         maps = named_map_steps(scene, guided.importance, map_options, options.resolution, cache_dir)

@@ -24,7 +24,8 @@ from .frame_jobs import (FrameJob, estimated_frame, guided_frame, map_frame, sel
 def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = None,
                       sequence: SequenceBudget | None = None, director_map: np.ndarray | None = None,
                       map_seconds: float = 0.0, progress: ProgressCallback | None = None) -> FrameJob:
-    """The frame job of ``request`` (checked here), ``auto``'s estimator chosen per frame.
+    """The frame job of ``request`` (checked by the front end that made it), ``auto``'s
+    estimator chosen per frame.
 
     Parameters
     ----------
@@ -39,7 +40,9 @@ def request_frame_job(request: RenderRequest, cache_dir: str | Path | None = Non
         Hears the samples of a gold, uniform or adaptive render (one Cycles render with no
         steps inside); None: the job announces the render as a step instead.
     """
-    request.check()
+    if request.scene_samples:
+        # Our bug, not the user's: the front end skipped ``at_scene_samples``.
+        raise ValueError("a request whose counts are the scene's must get them before it renders")
     traits = request.traits
 
     def make(chosen: RenderOptions) -> FrameJob:

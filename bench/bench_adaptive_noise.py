@@ -1,18 +1,14 @@
-"""Measurement: the noise Cycles' adaptive sampling leaves, as the sample count that leaves
-the same noise everywhere (what Auto Volumes takes its tolerance at for an adaptive render:
-``core.sampling.shot_plan.estimator_samples``). Not a timing: noise only, any machine.
+"""Measurement: the noise Cycles' adaptive sampling leaves, as the uniform sample count that
+leaves the same noise (what Auto Volumes takes its tolerance at for an adaptive render:
+``core.sampling.shot_plan.estimator_samples``). Noise only, not time: any machine.
 
-Per scene (its own settings, Blender's F12 with no denoiser, at ``--percentage`` of its
-size), the noise of a render is the median over pixels of |seed a - seed b| / sqrt(2),
-relative to the pixel's luminance (at least ``FLOOR``). Uniform renders at ``COUNTS`` give
-the noise-against-samples curve; an adaptive render at threshold t (Cycles' automatic
-minimum, ``--ceiling`` samples) reads its equivalent count N off that curve (log-log; a
-count past the curve's last reads as its last), and the script prints t x N and N over the
-minimum samples, which ``ADAPTIVE_SAMPLES_TIMES_THRESHOLD`` and ``ADAPTIVE_MINIMUM_SHARE``
+Per scene (its own settings, F12 without a denoiser, at ``--percentage`` of its size), a
+render's noise is the median over pixels of |seed a - seed b| / sqrt(2), relative to the
+pixel's luminance; uniform renders at ``COUNTS`` make the curve an adaptive render's threshold
+is read along. Prints t x N and N over the minimum samples, which the estimator's constants
 bound from above.
 
-    .venv/bin/python bench/bench_adaptive_noise.py --scenes balls_b,road --percentage 25
-"""
+    .venv/bin/python bench/bench_adaptive_noise.py --scenes balls_b,road --percentage 25"""
 from __future__ import annotations
 
 import argparse

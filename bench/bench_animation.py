@@ -1,32 +1,15 @@
 """Benchmark: an animation rendered in one Cycles session, and what ``guided`` gets over it.
 
-On the moving example (``street``: 24 frames at 256x144, a camera dollying through static
-noise fog past street lamps) this measures, each run a whole ``xsl-render`` process (Blender
-loading, scene syncs, maps, denoising: every fixed cost inside the time):
-
-1. **Sessions**: ``render --mode uniform --spp 16`` of the frames in one process
-   (``--frames``) against one process per frame (``--frame N``, what a farm task per frame
-   or a shell loop does): per-frame wall time and the seconds Cycles reported syncing.
-2. **Quality along the sequence**, against each frame's converged reference (``xsl-render
-   reference --frames``: 1024 spp, seed 7, denoised like every run; cached):
-   ``uniform`` (the scene's own settings) at 8..64 spp is the baseline curve; ``auto``
-   (uniform with ``--estimator auto``) at 16 spp; ``guided`` (auto estimator) at the
-   per-frame budget uniform 16 and 32 spp took; ``xsl`` (the paper's map, ceiling 64) for
-   its flicker. Per run: the means over frames of mean FLIP,
-   the 95th percentile of 32-px tile FLIP, the share of pixels above FLIP 0.103 and MSE
-   (``xsl-render compare`` on the sequences), the flicker measure, ColorVideoVDP's JOD of
-   the frames played as a video at 24 fps (where it is installed), and the equal-quality
-   speedup over the uniform curve on each (time = the whole process).
-3. **Guided's overhead over its frames**: the process's wall time against the sum of its
-   frames' render-only times (wall less Cycles' sync). ``--overhead`` measures only this, on
-   as many frames as asked (no references needed: the whole 24 in a few minutes).
+On ``street`` (24 frames, a camera dollying through static noise fog), each run a whole
+``xsl-render`` process: 1. one process for the frames against one per frame (wall time, and
+Cycles' sync per frame); 2. quality along the sequence against each frame's converged
+reference: the file's uniform curve (8..64 spp), auto at 16 spp, guided at uniform 16 and 32
+spp's per-frame time, xsl; means over frames of each criterion, flicker, video JOD, and the
+equal-quality speedups; 3. guided's process time over its frames' render-only times
+(``--overhead``). Run it on an otherwise idle machine.
 
     .venv/bin/python bench/bench_animation.py --out bench-animation --repeats 3
-    .venv/bin/python bench/bench_animation.py --frames 1-8 --repeats 1      # a quick look
-    .venv/bin/python bench/bench_animation.py --overhead --skip-sessions --skip-quality
-
-Run it on an otherwise idle machine (the times are the measure).
-"""
+    .venv/bin/python bench/bench_animation.py --overhead --skip-sessions --skip-quality"""
 from __future__ import annotations
 
 import argparse

@@ -1,22 +1,12 @@
 """Benchmark: how far each example scene's director maps let the speedup go, before any render.
 
-    .venv/bin/python bench/bench_bounds.py [SCENE ...] [--max-spp 64 16]
+The selective samples follow the map (``max(min_spp, round(max_spp * map))``), so the map
+alone fixes the ideal speedup (gold samples / selective samples). Per scene and ceiling it
+prints the maps' means, the ideal per pixel and of the tile plan actually rendered, and the
+same with S = 0: the highest any saliency map could give with the paper's weights, since
+XS(0.5, 0.5, +) >= 0.5 X. Only the snapshot renders; a few seconds per scene.
 
-The ideal speedup of a selective render is gold samples / selective samples, and the
-selective samples follow the map (section 5: ``max(min_spp, round(max_spp * map))``), so
-the map alone fixes how fast any renderer could be. Per scene and ceiling this computes
-the maps (``compute_maps``, the paper's defaults) and prints:
-
-- the means of X, S, L and of the map the issue judges (XS, or XSL for the road);
-- ``pixel``: the ideal speedup if every pixel got exactly its samples;
-- ``plan``: the ideal speedup of the tile plan that is actually rendered (tiling rounds up);
-- ``no S``: the same map with S = 0 everywhere: the highest speedup *any* saliency map
-  could give with the paper's weights, because XS(0.5, 0.5, +) >= 0.5 X wherever S >= 0.
-  When this is below the target, no renderer reaches the target on that scene;
-- the target of issue 6 (XS >= 5x on balls_a, balls_b, statue; XSL >= 3x on the road).
-
-Nothing here renders a frame except the snapshot; a run takes a few seconds per scene.
-"""
+    .venv/bin/python bench/bench_bounds.py [SCENE ...] [--max-spp 64 16]"""
 from __future__ import annotations
 
 import argparse

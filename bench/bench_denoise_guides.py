@@ -1,27 +1,13 @@
 """Benchmark: which denoising guides leave OIDN the least error in fog?
 
-In fog Cycles writes its denoising albedo and normal at the first scattering event, so the
-guides are as noisy as the image, and with the same samples (their noise correlates with the
-image's, which OIDN then keeps as detail). Guides measured, at equal samples of the image:
+In fog Cycles writes the albedo and normal guides at the first scattering event, as noisy as
+the image. At equal samples of the image: the guides as rendered (every mode's denoise),
+prefiltered (denoised first, quality Balanced, auto's, and High), another seed's, a
+surface-only render's (the media taken out), none. Each scene at ``bench_estimator.SIZES``
+with auto's choice at ``--spp``, seeds 0 .. repeats - 1, against the cached converged
+reference; prints medians and the denoise's seconds.
 
-- ``as rendered``: every mode's denoise (``addon.cycles.denoise``, prefilter Fast);
-- ``prefiltered``: the guides denoised first, each by OIDN on its own, then taken as clean
-  (OIDN's and Blender's "Accurate"), at quality Balanced (auto's) and High;
-- ``another seed's``: the guides of a second render of the same samples with another seed
-  (uncorrelated noise; a whole render's cost, so a bound, not an offer);
-- ``surface-only, N spp``: the guides of a render with the media taken out (the world's
-  volume unlinked, volume objects and volume-only meshes hidden): nearly noise-free and cheap
-  (no octree, no media), but they show the surfaces behind the fog at full contrast;
-- ``none``.
-
-Each scene is rendered at ``bench_estimator.SIZES`` with auto's choice at 16 spp as the
-estimator tables report it (ray marching at the scene's rate on road and balls_a, 0.5 on
-balls_b, 4 on statue; blue noise), at ``--spp``, seeds 0 .. repeats - 1, and compared with
-the converged reference (the cached one ``bench_estimator.py`` uses). Prints medians over
-the seeds, the denoise's seconds and the guide renders'.
-
-    .venv/bin/python bench/bench_denoise_guides.py --repeats 3 [--spp 32]
-"""
+    .venv/bin/python bench/bench_denoise_guides.py --repeats 3 [--spp 32]"""
 from __future__ import annotations
 
 import statistics

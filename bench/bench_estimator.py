@@ -1,27 +1,15 @@
 """Benchmark: Cycles' volume estimators on the example scenes, and what ``--estimator auto`` gets.
 
-For each scene (at ``SIZES``) this runs ``xsl-render curves`` (in this process) against the
-converged reference (uniform 1024 spp with the scene's own settings, seed 7, denoised like
-every run; cached after the first render) with these curves:
-
-- ``uniform``: the scene's own settings (null scattering, Blender 5's default), 4..64 spp;
-- ``biased_<rate>``: ray marching at scene step rate 0.25 .. 8, 4..64 spp (only on scenes
-  whose media are heterogeneous; a homogeneous medium is marched in one exact step, so
-  one ``biased_1`` curve stands for every rate), plus with ``--floor`` each rate at 256 spp:
-  its bias floor;
-- ``auto``: ``--estimator auto`` at 4..64 spp (its prediction timed inside each run);
-- ``guided_auto``: ``--mode guided --estimator auto`` at the times uniform 16 and 32 took.
-
-It prints per scene the auto and guided runs' equal-quality speedups over uniform with the
-scene's settings and over the best fixed step rate in hindsight (the lower envelope of every
-biased curve), on mean FLIP, the 95th percentile of 32-px region FLIP, the share of pixels
-above FLIP 0.103 and MSE, and ColorVideoVDP's JOD (over uniform and over auto) where it is
-installed; then each curve's points. ``street`` (the moving example's first frame) is not in
-the default set. Run it on an otherwise idle machine (the times are the measure).
+Per scene (at ``SIZES``), a curves job in this process against the cached converged
+reference: the file's uniform curve (4..64 spp), ray marching at step rates 0.25 .. 8 (one
+curve on homogeneous media; ``--floor``: each rate at 256 spp, its bias floor), auto, and
+guided at the times uniform 16 and 32 took. Prints each run's equal-quality speedup over the
+file, over the best fixed rate in hindsight (the biased curves' envelope) and over auto, on
+mean FLIP, p95 region FLIP, the share over 0.103, MSE (and JOD where installed). Run it on an
+otherwise idle machine.
 
     .venv/bin/python bench/bench_estimator.py --out bench-estimator --repeats 3
-    .venv/bin/python bench/bench_estimator.py --scenes balls_b --repeats 1
-"""
+    .venv/bin/python bench/bench_estimator.py --scenes balls_b --repeats 1"""
 from __future__ import annotations
 
 import argparse

@@ -1,20 +1,13 @@
 """Benchmark: does a frame of a range pay a fixed part beside its samples?
 
-A guided range prices the next frame's count at what the frames before it paid per sample
-(``core/sampling/sequence_budget.py``). On street its later frames at 8 spp paid 0.28-0.32 s
-per sample of the frame against 0.19-0.27 at 16, which reads as a fixed part per frame
-(about 0.9 s) priced as samples. This renders, in one Cycles session after the scene sync
-(what ``render --frames`` does), each frame asked for as whole frames at 1, 4, 8 and 16 spp
-(the order reversed on every other frame, so that a first render after the frame change
-lands on each count), and fits seconds = fixed + per-sample x spp per frame (least squares).
+A guided range prices the next frame's count at what the frames before paid per sample
+(``core/sampling/sequence_budget.py``), which is right only if a frame has no fixed part. In
+one Cycles session after the scene sync, each frame asked for is rendered whole at 1, 4, 8
+and 16 spp (the order reversed every other frame), and seconds = fixed + per sample x spp is
+fitted per frame. Street at 256x144, null scattering and blue noise. Run it on an otherwise
+idle machine.
 
-Street at 256x144 with its own estimator (null scattering, which a range keeps) and blue
-noise, the sample pattern auto renders with.
-
-    .venv/bin/python bench/bench_frame_cost.py --frames 2-5 --repeats 2
-
-Run it on an otherwise idle machine (the times are the measure).
-"""
+    .venv/bin/python bench/bench_frame_cost.py --frames 2-5 --repeats 2"""
 from __future__ import annotations
 
 import argparse

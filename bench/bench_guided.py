@@ -1,22 +1,13 @@
 """Benchmark: the equal-quality speedup of ``--mode guided`` on every example scene.
 
-For each scene this runs ``xsl-render curves`` (in this process) against the converged
-reference (uniform 1024 spp, seed 7, denoised like every run; cached after the first
-render): uniform sampling at 4..64 spp, Cycles' adaptive sampling at three thresholds, the
-guided sampler at the times uniform 16 and 32 spp took (alone, and weighted by the XSL map)
-and, unless ``--quick``, Cycles' path guiding and the paper's XS and XSL. Every run is
-repeated (``--repeats``, default 3, seeds 0, 1, 2) and the medians of time and error make
-the curves. It prints, per scene, the guided runs' equal-quality speedups over uniform and
-over adaptive, FLIP first and MSE beside it, then every other mode's; curves.png and
-report.html per scene are in ``--out``.
+Per scene, a curves job in this process against the cached converged reference: uniform
+4..64 spp, Cycles' adaptive at three thresholds, guided at the times uniform 16 and 32 spp
+took (alone, and weighted by the XSL map) and, unless ``--quick``, path guiding, XS and XSL;
+medians of ``--repeats``. Prints each guided run's speedup over uniform and over adaptive
+(FLIP and MSE) beside issue 11's targets, then every other run's. Run it on an otherwise idle
+machine.
 
-The issue's targets are printed with each figure: FLIP >= 1.0x everywhere and >= 1.15x on
-road, MSE >= 1.25x on road and balls_b, FLIP over adaptive >= 1.0x on road. Run it on an
-otherwise idle machine (the times are the measure).
-
-    .venv/bin/python bench/bench_guided.py --out bench-guided --quick      # ~30 min on 2 cores
-    .venv/bin/python bench/bench_guided.py --scenes road --quick --repeats 1
-"""
+    .venv/bin/python bench/bench_guided.py --out bench-guided --quick"""
 from __future__ import annotations
 
 import argparse

@@ -1,19 +1,13 @@
 """Benchmark: auto without Cycles' light tree where the scene has one light.
 
-Cycles chooses the light each sample takes with its light tree by default; with one light
-there is nothing to choose and the tree only costs (``core.sampling.light_tree``). Per scene
-(at ``bench_estimator.SIZES``) this renders auto's own choice (``--estimator auto`` at each
-count: step, sample pattern, and now its light tree) against the same choice with the file's
-light tree (on in every example), the whole frame in a fresh Cycles session each (the sync
-included), both arms alternating, seeds 0 .. repeats - 1; denoised as auto denoises, against
-the cached converged reference. It prints the median and the fastest seconds of each arm,
-their ratio, and the medians of mean FLIP, p95 region FLIP and MSE.
+With one light the tree has nothing to choose and only costs (``core.sampling.light_tree``).
+Per scene (at ``bench_estimator.SIZES``) auto's own choice against the same choice with the
+file's light tree, the whole frame in a fresh Cycles session each, arms alternating, seeds
+0 .. repeats - 1, against the cached converged reference: median and fastest seconds, their
+ratio, and the medians of mean FLIP, p95 region FLIP and MSE. On scenes with several lights
+(``--scenes road,statue``) it shows what the tree buys there.
 
-On the scenes with several lights auto keeps the tree; the arm without it is rendered there
-too, to show what the tree buys (``--scenes road,statue``).
-
-    .venv/bin/python bench/bench_light_tree.py --scenes balls_a,balls_b --repeats 5
-"""
+    .venv/bin/python bench/bench_light_tree.py --scenes balls_a,balls_b --repeats 5"""
 from __future__ import annotations
 
 import statistics

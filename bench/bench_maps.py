@@ -1,14 +1,10 @@
 """Benchmark: every director map of a scene, the snapshot, and the light map alone.
 
-    .venv/bin/python bench/bench_maps.py [SCENE.blend ...] [--runs 5] [--resolution WxH]
+The median of ``--runs`` runs of ``compute_maps`` (each map's seconds and the total; no ray
+cache, so every run casts its rays), the snapshot alone, and the L map alone at n = 20,
+sigma_base = 10 (eq. 6 at its widest) on the scene's lights. Default scene: road at 512x288.
 
-Default scene: example_blends/road.blend at its own 512x288. Prints the median of
-``--runs`` runs of ``compute_maps`` (each map's seconds and the total; the ray cache is
-not used, so every run casts its rays), the snapshot render alone, and the L map alone
-with n = 20 and sigma_base = 10 (eq. 6 at its widest) on the scene's own lights.
-Targets: issue 5: all maps for the road <= 3 s, L (n 20, sigma_base 10) <= 0.3 s;
-issue 4: S of a 512x288 image <= 0.3 s (see bench_saliency.py), road snapshot <= 1.5 s.
-"""
+    .venv/bin/python bench/bench_maps.py [SCENE.blend ...] [--runs 5] [--resolution WxH]"""
 from __future__ import annotations
 
 import argparse

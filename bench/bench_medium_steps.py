@@ -1,27 +1,14 @@
 """Benchmark: auto's own step per medium against one scene rate for all, on statue in fog.
 
-No example scene has two heterogeneous media, so this builds one: ``statue`` (an OpenVDB
-smoke with 5 cm voxels) inside ``balls_b``'s noise fog (a box from just in front of the
-camera to the wall, peak density ``FOG_PEAK``). The fog needs a fine scene rate; one rate for
-all then marches the smoke at it too, in voxel-sized steps (statue alone at rate 0.5: 11.6 s
-against null scattering's 4.9 s at 16 spp). Per medium, auto gives the smoke the coarsest
-rate the bias allows (its material's ``volume_step_rate``).
+No example scene has two heterogeneous media, so this builds one: ``statue``'s OpenVDB smoke
+inside ``balls_b``'s noise fog. The fog needs a fine scene rate, which one rate for all also
+gives the smoke (voxel-sized steps); auto gives the smoke the coarsest rate its bias allows
+(its material's ``volume_step_rate``). Curves in this process against a converged reference:
+the file's uniform, auto, auto with one rate (per-medium steps switched off) and guided at
+uniform 16 and 32 spp's times; prints each point's chosen steps and its speedups over the
+file and over one rate. Run on an otherwise idle machine.
 
-Curves (``xsl-render curves`` in this process, against a converged reference of the
-scene's own settings: null scattering, 1024 spp, seed 7, denoised like every run):
-
-- ``uniform``: the scene's own settings, 4..64 spp;
-- ``auto``: ``--estimator auto`` (a step per medium), 4..64 spp;
-- ``auto_one_rate``: the same with one scene rate for every medium (the choice before per
-  medium steps; rendered in a second pass with them switched off);
-- ``guided_auto``: ``--mode guided --estimator auto`` at the times uniform 16 and 32 took.
-
-It prints each auto point's time, error, chosen steps and equal-quality speedups over
-uniform and over the one-rate curve (mean FLIP, p95 region FLIP, share > 0.103, MSE).
-Run on an otherwise idle machine:
-
-    .venv/bin/python bench/bench_medium_steps.py --out bench-medium-steps --repeats 3
-"""
+    .venv/bin/python bench/bench_medium_steps.py --out bench-medium-steps --repeats 3"""
 from __future__ import annotations
 
 import argparse

@@ -1,23 +1,13 @@
 """Benchmark: how well a short reduced-resolution pilot prices a full frame's sample.
 
-A guided still learns what a sample costs from its pilot (``addon/cycles/guided_render.py``):
-the whole frame at a quarter of its resolution, 1 and 2 samples, the difference of their
-times. Per scene and seed this renders, in one Cycles session after the scene sync, the
-pilot at a quarter and at half the resolution with 1, 2 and 4 samples, then the whole frame
-at 16 spp, and prints each estimate's ratio to what the full frame paid per pixel-sample:
+A guided still prices a sample from its pilot (``addon/cycles/guided_render.py``). Per scene
+and seed, in one Cycles session after the sync: the pilot at a quarter and half resolution
+with 1, 2 and 4 samples, then the whole frame at 16 spp; prints each estimate's ratio to what
+the frame paid per pixel-sample (the difference of two renders, shipped; a render less its
+fixed cost; one full-resolution sample) and the frame's own seconds, whose spread is the floor
+under any pilot. At ``bench_estimator.SIZES`` with auto's choice at 16 spp and blue noise.
 
-- ``diff 1-2`` (shipped), ``diff 1-4``: the difference of two renders, which leaves out a
-  render's fixed cost;
-- ``whole 2``: the 2-sample render less ``_RENDER_OVERHEAD_S``;
-- ``full: whole 1``: one sample of the whole frame at full resolution, less it (a pilot
-  tried for a flat still and not shipped: README, "What still limits a guided still").
-
-The full frame's own seconds are printed too: their spread from seed to seed is the floor
-under any pilot. Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
-(``bench_denoise_guides.open_with_auto_choice``) and blue noise.
-
-    .venv/bin/python bench/bench_pilot_rate.py --repeats 4
-"""
+    .venv/bin/python bench/bench_pilot_rate.py --repeats 4"""
 from __future__ import annotations
 
 import statistics

@@ -1,16 +1,12 @@
 """Benchmark (prediction only, no renders): would a coarser step per region of the frame pay?
 
-Auto chooses one step rate per medium for the whole frame: the largest whose predicted visible
-bias (``core.sampling.volume_estimator.visible_bias``: the 95th percentile over the pixels of
-|dT| / max(min(T, 1 - T), 0.05)) stays within the noise the run's samples leave. A step per
-region would march coarser where that holds region by region. This casts one camera ray per
-pixel at a quarter of each scene's bench size, predicts Cycles' ray-marching error along
-every ray at the given rates (``core.media.ray_marching.MarchingPredictor``) and prints, per
-rate, the frame's measure and the share of 32-pixel regions (8x8 rays) whose own 95th
-percentile stays within 1.25 % (16 spp's tolerance) and 2.5 % (4 spp's).
+Auto chooses one step per medium for the whole frame, the largest whose predicted visible
+bias stays within the run's noise. This casts one camera ray per pixel at a quarter of each
+scene's bench size, predicts the marching error along every ray at the given rates
+(``core.media.ray_marching.MarchingPredictor``) and prints, per rate, the frame's measure and
+the share of 32-pixel regions whose own stays within 16 spp's and 4 spp's tolerance.
 
-    .venv/bin/python bench/bench_region_steps.py balls_b:0.5,1,2 statue:2,4,8 street:0.25,0.5,1
-"""
+    .venv/bin/python bench/bench_region_steps.py balls_b:0.5,1,2 statue:2,4,8 street:0.25,0.5,1"""
 from __future__ import annotations
 
 import sys

@@ -1,18 +1,13 @@
 """Benchmark: what Cycles' other render settings buy on top of auto's choice.
 
-Auto chooses the volume estimator, step, sample pattern, light tree and volume sampling
-(``addon.maps.estimator_choice``). A scene's remaining costs lie in settings auto leaves as
-the artist set them: bounces, clamping, the light tree where several lights share the
-frame. Per scene (at ``bench_estimator.SIZES``) this renders auto's own choice at a few
-counts (its curve) and, at ``--spp``, the same choice with one setting of ``scene.cycles``
-changed per arm (``--arms``, each ``name=value[;name=value]``), the whole frame in a fresh
-Cycles session each (the sync included), arms alternating, seeds 0 .. repeats - 1; denoised
-as auto denoises (guides prefiltered where they measure noisy), against the cached converged reference. It prints each arm's median and
-fastest seconds, medians of mean FLIP, p95 region FLIP and MSE, and its equal-quality
-speedup on mean FLIP and MSE read along auto's curve (above 1: the setting pays).
+Auto leaves bounces, clamping and (with several lights) the light tree as the artist set them.
+Per scene (at ``bench_estimator.SIZES``): auto's own curve at a few counts and, at ``--spp``,
+the same choice with one ``scene.cycles`` setting changed per arm (``--arms``, each
+``name=value[;name=value]``), a fresh Cycles session each, arms alternating, against the
+cached converged reference. Prints each arm's seconds, errors and equal-quality speedup along
+auto's curve (above 1: the setting pays).
 
-    .venv/bin/python bench/bench_render_settings.py --scenes road --repeats 3
-"""
+    .venv/bin/python bench/bench_render_settings.py --scenes road --repeats 3"""
 from __future__ import annotations
 
 import statistics

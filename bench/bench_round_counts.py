@@ -1,21 +1,14 @@
 """Benchmark: blue noise with its sequence rounded up to a power of two against the pure one,
 at counts between powers of two, after OIDN.
 
-Cycles lays its pure blue-noise sequence out by the render's sample count, so at a count off
-a power of two each pixel's samples no longer line up with the sequence's power-of-two
-strata; its "Blue-Noise (round)" pattern rounds the sequence up and renders the same pixels
-at a power of two (``core.sampling.sample_pattern``). A guided pass's columns and a range's
-frames land between powers of two, so this measures, per scene and count, one render of the
-whole frame per seed with each pattern, denoised as auto denoises (the guides prefiltered
-where they measure noisy), against the cached converged reference: mean FLIP, p95 region
-FLIP, MSE and the guides' noise (``core.sampling.denoise_guides.guide_noise``). Powers of two
-render once (the two patterns are the same there).
+Cycles lays its pure blue-noise sequence out by the render's count, so off a power of two a
+pixel's samples no longer line up with its strata; "Blue-Noise (round)" rounds the sequence
+up (``core.sampling.sample_pattern``). Per scene and count, one whole-frame render per seed
+with each pattern (powers of two once: the same there), denoised as auto denoises, against
+the cached converged reference: mean FLIP, p95 region FLIP, MSE and the guides' noise. At
+``bench_estimator.SIZES`` with auto's choice at 16 spp.
 
-Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
-(``bench_denoise_guides.open_with_auto_choice``).
-
-    .venv/bin/python bench/bench_round_counts.py --repeats 2 [--counts 12,16,20,24,28,32]
-"""
+    .venv/bin/python bench/bench_round_counts.py --repeats 2 [--counts 12,16,20,24,28,32]"""
 from __future__ import annotations
 
 import statistics

@@ -1,10 +1,7 @@
-"""Benchmark: the Itti-Koch-Niebur S map of a 512x288 image (issue 4 asks <= 0.3 s median).
+"""Benchmark: the Itti-Koch-Niebur S map of a 512x288 image (scikit-image's "astronaut" resized):
+the wall time of ``core.maps.saliency.saliency_map`` after one warm-up run.
 
-Run with ``.venv/bin/python bench/bench_saliency.py [--runs N]``. The image is scikit-image's
-bundled "astronaut" photograph resized to 512x288 (a natural image: colour, edges, texture);
-the time is wall-clock for ``core.maps.saliency.saliency_map`` (pyramids, 42 feature maps, N(.),
-conspicuity maps, S resampled to 512x288 and scaled to [0, 1]) after one warm-up run.
-"""
+    .venv/bin/python bench/bench_saliency.py [--runs N]"""
 from __future__ import annotations
 
 import argparse

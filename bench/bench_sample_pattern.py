@@ -1,23 +1,13 @@
 """Benchmark: what auto's sample pattern is worth, and auto's speed over a Blender 5 file.
 
-The example scenes carry Cycles' legacy sample pattern (Tabulated Sobol: their build script
-starts from Blender's factory settings, which version to it, as every file saved before
-Blender 4.2 does); a file made in Blender 5 has blue noise (``core.sampling.sample_pattern``).
-``--estimator auto`` renders the legacy pattern with blue noise. Per scene (at
-``bench_estimator.SIZES``, against the same converged reference) this runs:
+The example scenes carry Cycles' legacy pattern (files saved before Blender 4.2 do); a file
+made in Blender 5 has blue noise, and auto renders the legacy pattern with blue noise. Per
+scene (at ``bench_estimator.SIZES``, one converged reference): the file's uniform curve, auto
+and guided as ``bench_estimator.py --no-rates``, and the uniform curve of a copy whose only
+change is Blender 5's pattern (so auto over it is the rest of auto's gain). Prints each run's
+errors and its speedup over both uniform curves and over auto's. Idle machine only.
 
-- on the scene as it is: ``uniform`` (the file's own settings: legacy pattern, null
-  scattering), ``auto`` (auto's volume estimator and blue noise) and ``guided_auto``
-  (``--mode guided --estimator auto`` at uniform 16 and 32 spp's time), as
-  ``bench_estimator.py --no-rates`` does;
-- on a copy whose only change is Blender 5's pattern: ``uniform`` again, the baseline of a
-  file made in Blender 5 (so ``auto`` over it is the volume estimator's gain alone).
-
-It prints every run's errors and its equal-quality speedup over both uniform curves and over
-auto's. Run it on an otherwise idle machine (the times are the measure).
-
-    .venv/bin/python bench/bench_sample_pattern.py --out bench-pattern --repeats 3
-"""
+    .venv/bin/python bench/bench_sample_pattern.py --out bench-pattern --repeats 3"""
 from __future__ import annotations
 
 import sys

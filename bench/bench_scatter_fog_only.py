@@ -6,7 +6,7 @@ noise at "both" (multiple importance), in a frame where only the fog's single sc
 shows: surfaces held out, the sky black, no bounces. Beside it auto's prediction
 (``core.media.scatter_sampling``), which models exactly that light. A full frame
 (``bench_scatter_random.py``) mixes in the surfaces behind the fog; this bench tells the
-model's two terms apart (README, "On random lit scenes").
+model's two terms apart (docs/performance.md, "Where the scattering is placed").
 
     .venv/bin/python bench/bench_scatter_fog_only.py --scenes balls_a,balls_b --seeds 20,88
 """

@@ -1,19 +1,13 @@
 """Benchmark: auto's volume sampling on random lit scenes, against Cycles.
 
-For each seed, the scene ``tests/support/random_scenes.py`` draws (48x27) lit by
-``tests/support/random_lights.py`` (lamps in the fog, spots into it, area lights, suns):
-auto's prediction for every medium carrier (a material or the world) whose own method is not
-distance (``core.media.scatter_sampling``: each carrier's distance sampling over its own
-method, the others kept) and what auto switches, beside Cycles' noise, the pixels' variance
-over 6 seeds of 4 spp (``tests/support/scatter_oracle.py``), with auto's methods and with
-every carrier at distance, each over the noise with every carrier at its own (at equal
-samples: distance's cheaper sample is not counted). It sums up the switches' ratios and the
-misses: scenes where auto keeps every method and Cycles renders all at distance at under
-``DISTANCE_MARGIN`` of the own noise. ``tests/test_scatter_random.py`` checks a few of these
-seeds.
+Per seed, the scene ``tests/support/random_scenes.py`` draws (48x27), lit by
+``random_lights.py``: auto's prediction for every medium carrier whose own method is not
+distance, what auto switches, and Cycles' noise (pixel variance over 6 seeds of 4 spp,
+``tests/support/scatter_oracle.py``) with auto's methods and with every carrier at distance,
+each over the own methods' noise. Sums up the switches' ratios and the misses (auto keeps
+every method where distance renders under ``DISTANCE_MARGIN`` of the noise).
 
-    .venv/bin/python bench/bench_scatter_random.py --seeds 0-29
-"""
+    .venv/bin/python bench/bench_scatter_random.py --seeds 0-29"""
 from __future__ import annotations
 
 import argparse

@@ -1,21 +1,12 @@
 """Benchmark: are 2N samples per pixel from two seeds worth 2N from one, after OIDN?
 
-A guided still's count is priced by a pilot whose timing is noisy, and with blue noise a
-frame at a count just below a power of two is far worse than one at it (``sample_counts``).
-A pass that rendered too few could be topped up: a second render of the same pixels with
-another seed, merged by sample count (``PassAccumulator``), costs exactly the missing
-samples. This measures what such a merge is worth, per scene and seed pair (``2k``,
-``2k + 1``), denoised as every run is (OIDN with the guides, merged alike):
+A pass that rendered too few samples could be topped up by a second render of the same pixels
+with another seed, merged by sample count (``PassAccumulator``): it would cost exactly the
+missing samples. Per scene and seed pair, denoised as every run is: one seed's 2N, two seeds'
+N + N merged, and one seed's N; at ``bench_estimator.SIZES`` with auto's choice and blue
+noise, against the cached converged reference.
 
-- ``one seed, 2N``: one render of 2N samples;
-- ``two seeds, N + N``: two renders of N samples, merged;
-- ``one seed, N``: the first of those alone.
-
-Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp and blue noise
-(``bench_denoise_guides.open_with_auto_choice``), against the cached converged reference.
-
-    .venv/bin/python bench/bench_seed_merge.py --repeats 3 [--spp 8]
-"""
+    .venv/bin/python bench/bench_seed_merge.py --repeats 3 [--spp 8]"""
 from __future__ import annotations
 
 import sys

@@ -1,17 +1,13 @@
-"""Benchmark: selective rendering vs the gold standard, and the fixed cost of a tile render.
+"""Benchmark: selective rendering against the gold standard, and a tile render's fixed cost.
 
-For each scene (the built-in 512x288 fog scene, or .blend files), each ceiling (64 and 16 spp
-by default) and each director map (a synthetic radial map with a known mean, or EXR files
-given with --map), prints the median wall time of the gold render and of the selective
-render, the ideal speedup (gold samples / selective samples), the achieved one and their
-ratio (target >= 0.85). First, per scene, the overhead of one tile render: the grid of tiles
-rendered at 1 spp against one full frame at 1 spp (target <= 20 ms), and what a sample costs
-in each tile, which gives a cost-weighted ideal: a map that puts its samples on expensive
-pixels (lit surfaces in fog) cannot reach the sample-count ideal, overhead or not.
+Per scene (a built-in 512x288 fog scene, or .blend files), ceiling (64, 16) and director map
+(a synthetic radial map of known mean, or ``--map`` EXRs): the median wall time of gold and of
+the selective render, the ideal speedup (gold samples over selective samples), the achieved
+one and their ratio; first the overhead of one tile render (the grid of tiles against one
+frame, at 1 spp) and each tile's cost per sample, which gives a cost-weighted ideal.
 
     .venv/bin/python bench/bench_selective.py                         # built-in fog scene
-    .venv/bin/python bench/bench_selective.py --scene balls_a.blend --map maps/xs.exr --max-spp 16
-"""
+    .venv/bin/python bench/bench_selective.py --scene balls_a.blend --map maps/xs.exr --max-spp 16"""
 from __future__ import annotations
 
 import argparse

@@ -1,18 +1,13 @@
 """Benchmark: a render of fewer samples after one of more in one persistent Cycles session.
 
-A persistent session only ever raises the sample count its integrator lays the blue noise out
-by, so a later render of fewer samples takes each pixel's first samples of the longer
-sequence instead of its own count's (``core.sampling.sample_pattern.session_sequence``).
-This measures what that costs after OIDN: per scene, pattern and seed, the whole frame at 16
-and 8 spp in a fresh session and right after a render of 32 / 64 (for 16) or 16 (for 8) in
-the same session, denoised with the plain guides, against the cached converged reference
-(mean FLIP, p95 region FLIP, MSE; medians over the seeds).
+A persistent session only ever raises the count its integrator lays the blue noise out by, so
+a later render of fewer samples takes the start of the longer sequence
+(``core.sampling.sample_pattern.session_sequence``). Per scene, pattern and seed: the whole
+frame at 16 and 8 spp fresh and right after a render of more in the same session, denoised
+with the plain guides, against the cached converged reference (medians over the seeds); at
+``bench_estimator.SIZES`` with auto's choice at 16 spp.
 
-Scenes render at ``bench_estimator.SIZES`` with auto's choice at 16 spp
-(``bench_denoise_guides.open_with_auto_choice``).
-
-    .venv/bin/python bench/bench_session_sequence.py --scenes balls_a,balls_b --repeats 3
-"""
+    .venv/bin/python bench/bench_session_sequence.py --scenes balls_a,balls_b --repeats 3"""
 from __future__ import annotations
 
 import sys

@@ -1,16 +1,12 @@
 """Benchmark: the selective render on the example scenes with their media made denser.
 
-    .venv/bin/python bench/bench_thick_fog.py [--density-scale 4] [--max-spp 64] [SCENE ...]
+A what-if, not a change of the example scenes: the thin media of the examples cap the ideal
+speedup (``bench_bounds.py``). This writes copies whose every medium has ``--density-scale``
+times its density (never the originals), runs ``xsl-render experiment`` on them (gold, XS,
+XSL, the equal-time baselines) and prints each copy's mean transmittance, ideal and achieved
+speedups and the quality of XS and XSL.
 
-A what-if, not a change of the example scenes: the ideal speedup is 1 / mean(map) and
-XS(0.5, 0.5, +) is at least half the transmittance, so the thin media of the examples cap
-the speedup (``bench_bounds.py``); the paper's 5.2-10.3x imply much denser media. This
-script writes copies of the example scenes whose every medium has ``--density-scale``
-times its density (a Math node scales a driven density; the originals are never
-written), runs ``xsl-render experiment`` on the copies (gold, XS, XSL and the equal-time
-baselines, timed, with FLIP and MSE against gold) and prints, for each copy, the mean
-transmittance, the ideal and achieved speedups and the quality of XS and XSL.
-"""
+    .venv/bin/python bench/bench_thick_fog.py [--density-scale 4] [--max-spp 64] [SCENE ...]"""
 from __future__ import annotations
 
 import argparse

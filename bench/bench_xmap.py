@@ -1,21 +1,12 @@
-"""Benchmark: X map + Z buffer of a road scene at 512x288, and recomputation from the cache.
+"""Benchmark: the X map and Z buffer, and X recomputed from the cached rays.
 
-    .venv/bin/python bench/bench_xmap.py [SCENE.blend ...] [--examples] [--runs 5]
-                                         [--resolution WxH]
+Per scene (a road-like stand-in built in memory, about 40k triangles, or .blend files; the
+example scenes with ``--examples``), the median of ``--runs`` runs of ``compute_x_map`` with no
+cache (scene scan, BVH build, ray casts, media), of X recomputed from the cached rays after a
+density changed (with and without reading the cache file), and of a cache hit.
+``--noise-fog`` and ``--smoke`` make the stand-in's fog heterogeneous or add OpenVDB smoke.
 
-Without a .blend, a road-like stand-in is built in memory (road, verges, lamp posts with
-heads, signs, cars, world fog; about 40k triangles). Prints, per scene, the median of
-``--runs`` runs of (a) ``compute_x_map`` with no cache: scene scan (with the OpenVDB grids
-read), BVH build, ray casts, media; (b) the recomputation of X from the cached rays after
-a constant density changed (``x_map_from_cached_rays``), with and without reading the
-cache file; (c) ``compute_x_map`` with a cache hit.
-Targets (issue 3): (a) <= 1.0 s, (b) <= 0.1 s for homogeneous media.
-
-``--examples`` measures the example scenes at their own size: road (homogeneous fog),
-balls_b (noise-textured fog in a box around the camera) and statue (an OpenVDB smoke
-volume); target for balls_b and statue: (a) about 1.5 s. ``--noise-fog`` drives the
-stand-in's fog density by a Noise Texture and ``--smoke`` adds an OpenVDB smoke volume.
-"""
+    .venv/bin/python bench/bench_xmap.py [SCENE.blend ...] [--examples] [--runs 5] [--resolution WxH]"""
 from __future__ import annotations
 
 import argparse

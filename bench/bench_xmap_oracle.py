@@ -1,16 +1,13 @@
 """Benchmark: the randomized X-map oracle suite, seed by seed, and its worst seed.
 
-For each seed, the scene ``tests/support/random_scenes.py`` draws (64x36), X against the Cycles
-oracle as ``tests/test_xmap_random.py`` judges it: mean absolute error and 99th
-percentile over non-silhouette pixels with a surface (targets 0.01 and 0.05), the pixels
-compared, the pixels at ties (and, "model", how many of them were worked out, not measured by
-Cycles, ``addon.maps.ties``), the seconds of the X map and of the whole
-comparison, and what the scene holds. Then the worst seed by each figure, and how many
-seeds pass.
+Per seed, the scene ``tests/support/random_scenes.py`` draws (64x36), X against the Cycles
+oracle as ``tests/test_xmap_random.py`` judges it: mean absolute error and 99th percentile
+over non-silhouette pixels with a surface, the pixels at ties (and how many were worked out,
+``addon.maps.ties``), the seconds, and what the scene holds; then the worst seed by each
+figure and how many pass.
 
-    .venv/bin/python bench/bench_xmap_oracle.py                 # seeds 0-49 (~5 minutes)
-    .venv/bin/python bench/bench_xmap_oracle.py --seeds 0-9 --json out.json
-"""
+    .venv/bin/python bench/bench_xmap_oracle.py                 # seeds 0-49
+    .venv/bin/python bench/bench_xmap_oracle.py --seeds 0-9 --json out.json"""
 from __future__ import annotations
 
 import argparse

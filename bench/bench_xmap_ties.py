@@ -1,17 +1,12 @@
 """Benchmark: every map of a fog box resting on the ground, where half the frame is ties.
 
-    .venv/bin/python bench/bench_xmap_ties.py [--runs 3] [--resolution 384x216] [--after-only]
+The scene of ``tests/test_xmap_coincident.py``: every ground pixel is a tie
+(``CameraRays.ties``). The median of ``--runs`` runs of ``compute_maps`` (no ray cache), each
+map's seconds and the X map's parts, twice: every tie measured by a Cycles render
+(``addon.maps.ties.WORK_OUT`` off), and the ties worked out (``core.maps.embree_ties``) with
+small probe renders; ``cpu`` is the process's CPU time.
 
-The scene is the coincident-face tests' (``tests/test_xmap_coincident.py``): the camera in a
-fog box whose bottom face lies on the ground plane, so every pixel of the ground is a tie
-(``CameraRays.ties``). Prints the median of ``--runs`` runs of ``compute_maps`` (no ray
-cache: every run casts its rays), each map's seconds and the X map's parts, twice: before
-(every tie measured by a Cycles render, ``addon.maps.ties.WORK_OUT`` off) and after (the
-ties worked out, ``core.maps.embree_ties``, with small probe renders). ``cpu`` is the
-process's CPU time (Cycles renders on every core, so it exceeds the wall time on an idle
-machine; on a loaded one the wall time exceeds it).
-Target (issue 20): the maps at 384x216 in at most 1 s.
-"""
+    .venv/bin/python bench/bench_xmap_ties.py [--runs 3] [--resolution 384x216] [--after-only]"""
 from __future__ import annotations
 
 import argparse

@@ -1,17 +1,12 @@
 """What a user hands a command, checked before any work: numbers, sizes Blender can make,
 files to read and places to write.
 
-Every check raises InputError with one line that names the problem, and never writes
-anything that outlasts it. ``name`` (what the user knows the value as, "the output path")
-starts the message; given as a ``Field`` (``Field("max_spp")``, a setting's field name) a
-number or size check raises a SettingError naming that setting, which each front end words
-its own way (``core.errors``). Without a name the message starts with "must" or names the
-path, for the command line's argument converters (``operators/commands/argtypes.py``),
-which put ``argument --max-spp:`` in front themselves.
-
-Blender's limits are copied here so that the checks run without loading Blender;
-``tests/test_checks.py`` compares them with Blender's own property ranges.
-"""
+Every check raises InputError with one line naming the problem and writes nothing that
+outlasts it. ``name`` starts the message; a ``Field`` (a setting's field name) makes a number
+or size check raise a SettingError naming that setting, which each front end words its own
+way. Without a name the message starts with "must", for the command line's argument types,
+which put ``argument --max-spp:`` in front. Blender's limits are copied here so the checks
+run without Blender; ``tests/test_checks.py`` compares them with Blender's own ranges."""
 from __future__ import annotations
 
 import math

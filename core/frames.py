@@ -1,20 +1,11 @@
 """Frame ranges and lists, and numbered output names for animations, as Blender names its
 own frames.
 
-A frame list is what Open Job Description's range expressions accept: ranges and single
-frames joined by commas, ``1-3,8`` or ``1-250:2,300`` (``parse_frame_list``); the command
-line (``render --frames``, ``farm --frames``) and the farm's job template read the same
-text, so a list the template takes is never refused by the command that wrote it. Chunks of
-frames (several frames a task) are built on this parser, not into it.
-
-Blender's rule for an output path (``BLI_path_frame``): the last run of ``#`` in the file
-name (never in a folder name) becomes the frame number, zero-padded to the run's length;
-without any ``#`` the number is appended with four digits, and a path ending in a folder
-separator gets just the number as its name. The file extension is then added.
-
-One deliberate difference: a name that already ends in ``.exr`` keeps it at the end, so
-``render.exr`` numbers as ``render0001.exr`` (Blender would write ``render.exr0001.exr``).
-"""
+A frame list is what Open Job Description's range expressions accept (``1-3,8``,
+``1-250:2,300``), so the command line and the farm's job template read the same text. An
+output path's last run of ``#`` in the file name becomes the frame number, zero-padded to the
+run's length (Blender's ``BLI_path_frame``); without one, four digits are appended. One
+deliberate difference: a name ending in ``.exr`` keeps it at the end (``render0001.exr``)."""
 from __future__ import annotations
 
 import re

@@ -2,21 +2,12 @@
 stops the work.
 
 Every output is written under a temporary name next to its real one and renamed into place
-(``core.files``). Each temporary is recorded here while it exists, and so is every folder
-made to hold one:
-
-- an error: the writer removes its temporaries as the exception unwinds;
-- Ctrl-C or SIGTERM, at any moment: the command line's signal watcher
-  (``operators/signals.py``) calls :func:`abort` from its own thread, while the main thread
-  may be anywhere, even inside Blender's C code; it removes them all, and the folders made
-  for them when they are empty, and the process ends;
-- a kill (SIGKILL, a power cut) cannot be answered: temporary names carry the id of their
-  process, and a later run removes those of processes that are gone (:func:`sweep`).
-
-Renames into place run under :func:`gate`, whose lock :func:`abort` takes too: a cancel never
-lands between two renames of a set, and once it is decided no temporary is made and no
-rename starts.
-"""
+(``core.files``); each temporary, and each folder made for one, is recorded here. On an error
+the writer removes its own; on Ctrl-C or SIGTERM the signal watcher calls :func:`abort` from
+its thread, wherever the main thread is, which removes them all; a kill cannot be answered,
+so temporary names carry their process id and a later run sweeps those of processes that are
+gone (:func:`sweep`). Renames run under :func:`gate`, whose lock :func:`abort` takes too: a
+cancel never lands between two renames of a set."""
 from __future__ import annotations
 
 import os

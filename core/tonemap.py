@@ -1,37 +1,12 @@
-"""Tone maps from scene-linear HDR renders to display-referred [0, 1] images.
+"""Tone maps from scene-linear HDR renders to display-referred [0, 1] images, for two questions.
 
-The saliency model (Itti et al. 1998) and the image metrics were built for images as a
-display shows them, not for scene radiance. Two transforms, for two different questions:
-
-- :func:`tonemap` (saliency): *what would catch the eye in this scene?* The exposure must
-  follow the scene, whatever its absolute brightness, so it is scene-adaptive (below).
-- :func:`standard_view` (metrics, shared by MSE, FLIP and VDP): *would a viewer see a
-  difference between two renders?* Both renders must go through exactly the same fixed
-  curve, the one Blender itself shows them with (the "Standard" view transform), so a
-  difference in the output is a difference in the renders, never in the tone map.
-
-The saliency operator is the global photographic tone reproduction of Reinhard, Stark, Shirley and
-Ferwerda, "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002, section 3:
-
-- ``L̄_w = exp(mean(log(δ + L_w)))``, the log-average ("key") luminance (their eq. 1);
-- ``L = (a / L̄_w) L_w`` with the middle-grey key ``a = 0.18`` (eq. 2);
-- ``L_d = L / (1 + L)`` (eq. 3);
-- each colour channel scaled by ``L_d / L_w`` (hue and saturation kept), clipped to [0, 1]
-  and encoded with the sRGB transfer curve, the encoding of an 8-bit image on a display.
-
-Why this one: Cycles' absolute radiance depends on light strengths that differ by orders
-of magnitude between scenes (a sunlit road, a fog lamp at night), so a fixed exposure would
-leave one scene black and another white. Normalising the log-average to middle grey makes
-the exposure follow the scene, as a camera's auto-exposure does, and ``L / (1 + L)``
-compresses visible light sources and their glow smoothly instead of clipping them to a flat
-white blob (which would erase the very structure the saliency model reacts to). It is
-global (no local contrast of its own that could create or hide salient features),
-deterministic and has no free parameter beyond the standard key. Equation 3 rather than the
-white-point variant (eq. 4) is used because the white point would be set by the single
-brightest pixel, which a noisy low-sample render (fireflies) makes unstable.
-
-Luminance uses the Rec. 709 weights of Blender's default scene-linear space.
-"""
+:func:`tonemap` (saliency: what would catch the eye?) follows the scene's brightness: the
+global photographic operator of Reinhard et al. (SIGGRAPH 2002, eqs. 1-3: the log-average
+luminance to middle grey, then ``L / (1 + L)``, hue kept, sRGB-encoded), so a sunlit road and a
+night lamp both expose well and glows compress instead of clipping; eq. 3 rather than the
+white-point variant, which one firefly would set. :func:`standard_view` (the metrics: would a
+viewer see a difference?) is Blender's fixed "Standard" view, the same for both images, so a
+difference in the output is one in the renders. Rec. 709 luminance weights."""
 from __future__ import annotations
 
 import numpy as np

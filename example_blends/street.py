@@ -1,18 +1,12 @@
 """street: a camera moving down a foggy street at night (an animation, 24 frames at 24 fps).
 
-Tests animation in heterogeneous fog: only the camera moves (keyframed location and a
-slight pan), everything else, the fog included, stays still, so Cycles' persistent data can
-keep the fog (its volume octree, the expensive part of a sync) from one frame to the next.
-The street runs along +Y between pavements with kerbs, house fronts as boxes and a garden
-wall; the camera dollies 5 m forward past four street lamps (point lights ``Lamp.1`` ...
-inside emissive bulbs ``Lamp.1.Bulb`` ... seen only by the camera, as in road), a parked car
-and a parking sign. The fog is a large box ``Fog`` resting on the ground around all of it
-(the camera stays inside): a Principled Volume whose Density is a Noise Texture in the
-box's own Object coordinates (as in balls_b, so the field is fixed in space and the same on
-every build), over a thin floor of constant density and thinning with height.
+Only the camera moves (keyframed location and a slight pan), so Cycles' persistent data can
+keep the fog's volume octree from frame to frame. The camera dollies 5 m forward past four
+street lamps (``Lamp.1`` ... in emissive bulbs), house fronts, a parked car and a sign, inside
+a large fog box ``Fog``: a Principled Volume whose density is a Noise Texture in the box's own
+coordinates over a thin constant floor, thinning with height.
 
-Run: ``python street.py`` writes street.blend next to this file.
-"""
+Run: ``python street.py`` writes street.blend next to this file."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -9,7 +9,7 @@ import bpy
 class _AutoVolumesOperator:
     @classmethod
     def poll(cls, context):
-        from ..addon.auto_volumes import unsupported
+        from ..addon.cycles.volume_settings import unsupported
 
         if context.scene is None:
             cls.poll_message_set("There is no scene")

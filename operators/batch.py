@@ -1,20 +1,12 @@
 """The batch entry: ``xsl-render`` commands inside ``blender -b scene.blend``.
 
-    blender -b scene.blend --python-expr "import bl_ext.user_default.xsl_render as x; x.batch()" \\
+    blender -b scene.blend --python-expr "import bl_ext.user_default.xsl_render as x; x.batch()" \
         -- render --mode xsl --max-spp 16 --out out.exr
 
-Everything after ``--`` is parsed by the parser of the ``xsl-render`` command
-(``operators/cli.py``) and run by the same code, with one difference: SCENE.blend is left
-out, the commands work on the file Blender has open (``--scene-name`` still picks another
-scene of it). So ``info``, ``maps``, ``render`` (also ``--frames``) behave as on the
-command line, and nothing is written to the .blend.
-
-Exit: 0 returns normally (Blender goes on with its own arguments); a failure raises
-``SystemExit`` with the command's code (2 bad input, 1 internal error, 130 cancelled), which
-ends Blender with that code after printing the one-line message. Ctrl-C is answered from the
-entry's first instruction on (``operators/interrupt.py``): before the work begins, 130 and
-"cancelled"; during it, "cancelling after the current render", then 130.
-"""
+Everything after ``--`` is parsed and run by the ``xsl-render`` command's own code, on the file
+Blender has open (SCENE.blend left out; nothing is written to it). A failure raises
+``SystemExit`` with the command's code (2, 1, 130) after its one-line message; Ctrl-C is
+answered from the entry's first instruction (``operators/interrupt.py``)."""
 from __future__ import annotations
 
 import sys

@@ -1,33 +1,20 @@
 """The ``xsl-render`` command: parse, check, call, report.
 
-Each subcommand lives in ``operators/commands/<name>.py`` with ``add_arguments(parser)`` and
-``run(args) -> int``, and optionally:
-
-- ``files(args) -> (inputs, outputs)``: the files its options imply beyond the options
-  themselves (label -> path; ``commands/argtypes.declared_files``), such as a render's
-  ``_spp.exr``; with the options' files they go through one check before anything else
-  (``core.checks.separate_files``): no output is the same file as an input or another
-  output, no input is a FIFO or device, every name fits the system's limits;
-- ``check(args)``: what relates several options, raising InputError; it runs once every
-  option was checked on its own (``commands/argtypes.py``) and before ``run``, so a bad
-  input is refused before Blender loads or anything is written;
-- ``OUTPUTS_AS_A_SET`` (default True), or ``outputs_as_a_set(args)`` where it depends on the
-  options: every file the command writes appears at its end, all at once, or not at all
-  (``core.files.output_set``). False for commands that keep finished work as they go (an
-  animation, the validation, farm tasks);
-- ``INTERRUPTIBLE`` (default False): Ctrl-C raises KeyboardInterrupt in the command (a server
-  that shuts down cleanly) instead of cancelling it (``signals.py``).
-
-Exit codes: 0 success, 2 bad input (one line on stderr, no traceback; a setting is named by
-its option, ``commands/setting_flags.py``), 130 cancelled (143 for SIGTERM), 1 an
-unexpected failure (one line, plus the traceback with ``XSL_DEBUG=1``).
-"""
+A subcommand (``operators/commands/<name>.py``) has ``add_arguments(parser)`` and
+``run(args) -> int`` and may have ``files(args)`` (the files its options imply, checked with
+the options' own by ``core.checks.separate_files`` before anything else), ``check(args)`` (what
+relates several options, before Blender loads), ``OUTPUTS_AS_A_SET`` / ``outputs_as_a_set(args)``
+(every file appears at the end or none; False where finished work is kept as it goes) and
+``INTERRUPTIBLE`` (Ctrl-C raises KeyboardInterrupt in it). Exit codes: 0 success, 2 bad input
+(one line, a setting named by its option), 130 / 143 cancelled, 1 an unexpected failure (one
+line; the traceback with ``XSL_DEBUG=1``)."""
 from __future__ import annotations
 
 import argparse
 import os
 import re
 import sys
+import textwrap
 import traceback
 from contextlib import nullcontext
 from typing import Callable
@@ -63,14 +50,20 @@ class OneLineParser(argparse.ArgumentParser):
 def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
     """The command line. ``in_blender``: the parser of the batch entry (``operators/batch.py``),
     the same commands and options, with SCENE.blend left out (Blender has the file open)."""
-    from .commands import COMMANDS
+    from .commands import COMMANDS, GROUPS
 
-    parser = OneLineParser(prog="xsl-render",
-                           description="Perceptual selective rendering of participating media "
-                                       "(Sundstedt et al. 2007) with Blender Cycles.")
+    parser = OneLineParser(prog="xsl-render", usage="%(prog)s [-h] [--verbose] COMMAND ...",
+                           formatter_class=argparse.RawDescriptionHelpFormatter,
+                           description=textwrap.fill(
+                               "Render fog, smoke and clouds in Blender Cycles faster at the same "
+                               "look (Auto Volumes), and the paper's perceptual selective rendering "
+                               "of participating media.", 78),
+                           epilog=command_list(GROUPS))
     parser.add_argument("--verbose", action="store_true",
                         help="keep Blender's console output in a log file and print its path")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    # The commands are listed by group in the epilog, not as one list.
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser,
+                                help=argparse.SUPPRESS, prog="xsl-render")
     sub.required = True
     for command in COMMANDS:
         child = sub.add_parser(command.NAME, help=command.HELP, description=command.HELP)
@@ -78,6 +71,20 @@ def build_parser(in_blender: bool = False) -> argparse.ArgumentParser:
         command.add_arguments(child)
         child.set_defaults(run=command.run, command=command, file_options=file_options(child))
     return parser
+
+
+def command_list(groups: dict) -> str:
+    """The commands by group, each with its help, as the top-level --help ends."""
+    width = max(len(command.NAME) for commands in groups.values() for command in commands) + 2
+    lines = []
+    for title, commands in groups.items():
+        lines.append(f"{title}:")
+        for command in commands:
+            wrapped = textwrap.wrap(command.HELP, 78 - width - 2)
+            lines.append(f"  {command.NAME:<{width}}{wrapped[0]}")
+            lines += [" " * (width + 2) + line for line in wrapped[1:]]
+        lines.append("")
+    return "\n".join(lines) + "'xsl-render COMMAND --help' says more about each."
 
 
 class _Failed(Exception):

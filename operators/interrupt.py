@@ -1,25 +1,12 @@
 """Ctrl-C where Blender owns the process (``blender -b ... x.batch()``).
 
-Blender runs a render in C and calls back into Python (Cycles' engine, status handlers);
-a KeyboardInterrupt raised there is caught and printed by Blender and the render goes on,
-and Python only runs signal handlers in the main thread once the render has returned. So the
-batch entry watches SIGINT through Python's wakeup file descriptor, which the C-level handler
-writes at once, from a helper thread, around the whole command (``operators/batch.py``):
-
-- before the command's work begins (its imports, the parse and the checks: ``begin_work``),
-  Ctrl-C ends it with 130 and one line ("cancelled"), nothing done;
-- while it works, the first Ctrl-C says "cancelling after the current render" and asks the
-  progress callback to cancel, which stops the work at the next safe point (between two tile
-  renders, or after a single render) with nothing more written and the scene restored; from
-  the announcement on no output goes into place (``core.temporaries.request_cancel``), so
-  the command ends with 130 whatever it was doing, unless its outputs were already in place
-  (then the signal came too late and is ignored, silently); a second Ctrl-C exits at once.
-
-A command's own ``InterruptToCancel`` inside the batch entry's is that one. The
-``xsl-render`` console script goes further (``signals.py``): SIGINT is blocked in every
-thread from its first instruction and its own watcher cancels at once, so there this
-context never sees a signal.
-"""
+Blender renders in C and catches a KeyboardInterrupt raised in its Python callbacks, so the
+batch entry watches SIGINT through Python's wakeup file descriptor from a helper thread: before
+the command's work begins, Ctrl-C ends it with 130 and "cancelled"; while it works, the first
+says "cancelling after the current render" and the work stops at the next safe point with
+nothing more written and the scene restored (unless its outputs were already in place); a
+second exits at once. The ``xsl-render`` console script blocks SIGINT from its first
+instruction instead (``signals.py``), so there this context never sees a signal."""
 from __future__ import annotations
 
 import os

@@ -1,19 +1,11 @@
 """Running a job (``jobs.py``) from an operator: modally in the interface, in one go otherwise.
 
-- Clicked in the panel (``invoke``): a modal operator. A window timer advances the job one
-  step per tick (a map, a tile, a band of the gold render), so between steps Blender
-  redraws, shows the progress (cursor counter, status bar, the panel's bar) and reads ESC,
-  which closes the job: its ``preserved_scene`` blocks put every setting back at once.
-  Navigation (mouse wheel, middle mouse) passes through; edits and undo wait until the job
-  ends, since the scene's render settings are borrowed while it runs.
-- Called from a script or in ``blender -b`` (``execute``): the whole job runs before the
-  call returns (progress lines on stderr in the background), so batch scripts see the images
-  and files when ``bpy.ops.xsl.*()`` returns.
-
-Either way: bad input (``InputError``) is one ERROR report, naming settings by their panel
-labels (``addon/panel/setting_labels.py``), a cancel one WARNING, and only
-a bug of ours prints a traceback (with ``XSL_DEBUG=1``; otherwise its one-line summary).
-"""
+Clicked in the panel, a window timer advances the job one step per tick (a map, a tile, a band
+of the gold render), so Blender redraws, shows the progress and reads ESC, which closes the job
+and puts every setting back; navigation passes through, edits wait. From a script or ``blender
+-b`` the whole job runs before the call returns. Bad input is one ERROR report naming settings
+by their panel labels, a cancel one WARNING; only a bug of ours prints a traceback (with
+``XSL_DEBUG=1``)."""
 from __future__ import annotations
 
 import os

@@ -18,7 +18,7 @@ from ..core.checks import separate_files, writable_file
 from ..core.errors import InputError
 from ..core.frames import frame_path, has_frame_marker
 from ..core.maps.files import MapSet
-from ..core.panel.settings import guided_options, map_options, render_options, uses_budget
+from ..core.panel.settings import guided_options, map_options, render_options
 from ..core.progress import Steps
 from ..core.sampling.render_files import render_output_paths, write_render_outputs
 
@@ -75,27 +75,26 @@ def maps_report(maps: MapSet) -> str:
 
 
 # -- renders -------------------------------------------------------------------------------
-def selective_job(scene, animation: bool = False, filepath: str = "") -> Job:
-    """The panel's sampler: maps, then the selective render driven by the director map
-    chosen in the panel; or, with the Time Budget sampler, the guided render within the
-    budget (its importance map computed first, inside the budget; every frame of an
-    animation gets its own budget)."""
+def selective_job(scene, animation: bool = False, filepath: str = "", budget: bool = False) -> Job:
+    """Maps, then the selective render driven by the director map chosen in the panel; or
+    (``budget``) the render within the panel's time budget (its importance map computed first,
+    inside the budget; the frames of an animation share their budgets)."""
     from ..addon.render_dispatch import request_frame_job
     from ..core.sampling.sequence_budget import SequenceBudget
     from ..core.sampling.render_request import RenderRequest
 
     settings = scene.xsl_render
-    options = render_options(settings)
+    options = render_options(settings, budget)
     sequence = None
-    if uses_budget(settings):
+    if budget:
         request = RenderRequest("guided", options, guided=guided_options(settings),
-                                map_options=map_options(settings))
-        label = "Guided render"
+                                map_options=map_options(settings)).check()
+        label = "Time budget render"
         # An animation's frames share its time (the first frame's scene sync paid back by the rest).
         if animation:
             sequence = SequenceBudget(request.guided.time_budget, len(animation_frames(scene)))
     else:
-        request = RenderRequest(settings.director.lower(), options, map_options=map_options(settings))
+        request = RenderRequest(settings.director.lower(), options, map_options=map_options(settings)).check()
         label = f"{request.mode.upper()} render"
     frame_job = request_frame_job(request, ray_cache_dir(scene), sequence)
     if animation:
@@ -118,7 +117,7 @@ def gold_job(scene, animation: bool = False, filepath: str = "", banded: bool = 
             lambda chosen: stepped_render_frame(lambda s: gold_band_steps(s, chosen)),
             options, options.max_spp)
     else:
-        frame_job = request_frame_job(RenderRequest("gold", options))
+        frame_job = request_frame_job(RenderRequest("gold", options).check())
     if animation:
         return _animation_job(scene, "Gold render", frame_job, options, filepath, gold=True)
     return Job("Gold render", frame_job(scene), _still_finish(scene, options, filepath, gold=True))

@@ -1,9 +1,8 @@
-"""``bpy.ops.xsl.render_selective`` and ``bpy.ops.xsl.render_gold``: the panel's renders.
-
-Settings come from ``scene.xsl_render`` (the panel); its sampler decides whether
-``render_selective`` renders selectively (the paper) or guided within a time budget. The result is shown as images
-("XSL Render" and "XSL Samples", or "XSL Gold" and "XSL Gold Samples") and, with
-``filepath`` or ``animation``, written as EXR files as ``xsl-render render`` writes them.
+"""``bpy.ops.xsl.render_budget``, ``render_selective`` and ``render_gold``: the panel's renders
+(within its time budget, the paper's selective render, the gold standard), with the settings
+of ``scene.xsl_render``. The result is shown as images ("XSL Render" and "XSL Samples", or "XSL
+Gold" and "XSL Gold Samples") and, with ``filepath`` or ``animation``, written as EXR files as
+``xsl-render render`` writes them.
 """
 from __future__ import annotations
 
@@ -22,11 +21,24 @@ _FILEPATH = bpy.props.StringProperty(
                 "//render/frame_####.exr; empty: the scene's output path)")
 
 
+class XSL_OT_render_budget(JobOperator, bpy.types.Operator):
+    """Render within the time budget: as many samples as its seconds afford, with the panel's
+    Volumes estimator; result in the "XSL Render" and "XSL Samples" images"""
+
+    bl_idname = "xsl.render_budget"
+    bl_label = "Render Within Budget"
+    bl_options = {"REGISTER"}
+
+    animation: _ANIMATION
+    filepath: _FILEPATH
+
+    def make_job(self, context, modal: bool):
+        return selective_job(context.scene, self.animation, self.filepath, budget=True)
+
+
 class XSL_OT_render_selective(JobOperator, bpy.types.Operator):
-    """Render with samples where a viewer will notice them: the panel's director map (XS or
-    XSL) scales Max Samples per pixel, or (Time Budget sampler) the guided render spends the
-    time budget where the denoised frame keeps its error; result in the "XSL Render" and
-    "XSL Samples" images"""
+    """Render with samples where a viewer will notice them (the paper): the director map (XS
+    or XSL) scales Max Samples per pixel; result in the "XSL Render" and "XSL Samples" images"""
 
     bl_idname = "xsl.render_selective"
     bl_label = "Selective Render"

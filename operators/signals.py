@@ -1,33 +1,13 @@
 """Ctrl-C and SIGTERM on the command line, safe from the first instruction to the last.
 
-Python turns Ctrl-C into KeyboardInterrupt wherever the main thread happens to be: inside
-``import bpy`` that leaves Blender half set up (tracebacks, then a segmentation fault); and
-once Blender is up, its own handler takes SIGINT over and only asks the render to stop,
-which our code never hears. So the console script's first instruction (``entry.py``) blocks
-both signals in the main thread, before any other thread exists: every thread started later
-(Blender's, Cycles', numpy's) inherits the block, no handler ever runs, and the signal waits
-for the one thread that asks for it with ``sigwait``, the :class:`Watcher`:
-
-- while a command works, the watcher cancels it at once: every temporary file and folder
-  goes (``core.temporaries.abort``, which waits for a set of renames under way to finish, so
-  an output set is whole or absent), one line goes to stderr, and the process ends with 130
-  (SIGINT) or 143 (SIGTERM) — from another thread, so it does not matter what the main
-  thread is doing, in Python or in C;
-- once the command's outputs are in place (``temporaries.seal``) a signal comes too late
-  and is ignored: the command ends as it would have;
-- a command that runs until stopped (``experiment-serve``) asks for
-  :meth:`Watcher.interrupt_main_thread`: the signal becomes KeyboardInterrupt in its main
-  thread, it shuts down cleanly, and the command line ends with 130 or 143 all the same
-  (:attr:`Watcher.received`). Python's own SIGINT handler is put in place for that, whatever
-  the process inherited: a background job of a shell script starts with SIGINT ignored, and
-  ``_thread.interrupt_main`` does nothing then.
-
-The watcher needs the GIL to act: while Blender holds it the cancel waits, but it always
-comes, and nothing is written meanwhile. While Blender starts (``import bpy``, about half a
-second) it waits for the start to end (``entry.py``): Blender makes its own temporary folder
-then. The main thread goes on while the temporaries go: what it says from the decision on
-goes nowhere, so the cancel's line is the only one.
-"""
+Python's KeyboardInterrupt lands wherever the main thread is (inside ``import bpy`` it leaves
+Blender half set up), and Blender's own handler only asks a render to stop. So the console
+script's first instruction blocks both signals in the main thread before any other thread
+exists; every later thread inherits the block, and one :class:`Watcher` thread takes them with
+``sigwait``. While a command works it cancels at once: every temporary goes
+(``core.temporaries.abort``), one line, exit 130 or 143; once the outputs are in place a signal
+is ignored; a command that runs until stopped gets KeyboardInterrupt in its main thread instead
+(:meth:`Watcher.interrupt_main_thread`)."""
 from __future__ import annotations
 
 import _thread

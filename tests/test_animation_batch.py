@@ -139,7 +139,8 @@ def test_batch_arguments_follow_the_separator(addon, foggy_animation, capfd, mon
     assert info["scene"] == "Scene" and info["frames"]["end"] == 3
 
 
-@pytest.mark.parametrize("mode, budget", [("uniform", ["--spp", "2"]), ("xsl", []),
+@pytest.mark.parametrize("mode, budget", [("uniform", ["--spp", "2", "--estimator", "scene"]),
+                                          ("xsl", ["--estimator", "scene"]),
                                           ("uniform", ["--spp", "2", "--estimator", "unbiased"]),
                                           ("guided", ["--time-budget", "1.5", "--estimator", "unbiased"])])
 def test_frames_after_the_first_cost_no_scene_sync(blender, addon, mode, budget, tmp_path):

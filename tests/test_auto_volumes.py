@@ -304,7 +304,7 @@ def test_the_switch_is_in_cycles_volumes_panel_and_on_top_of_the_xsl_panel(blend
 
     from support.ui_stub import draw
 
-    from xsl_render.addon import auto_volumes
+    from xsl_render.addon.cycles import volume_settings
     from xsl_render.addon.panel import ui
 
     scene = build_fog_scene(blender, 16, 9)
@@ -320,7 +320,7 @@ def test_the_switch_is_in_cycles_volumes_panel_and_on_top_of_the_xsl_panel(blend
     assert ("prop", scene.render, "use_lock_interface", "Lock Interface (needed for F12 here)") \
         in draw(blender, ui.RENDER_PT_xsl_render, context)
     # A Blender without the volume settings: greyed out, with the reason; renders untouched.
-    monkeypatch.setattr(auto_volumes, "NEEDED_SETTINGS", (("scene", "volume_future_setting"),))
+    monkeypatch.setattr(volume_settings, "NEEDED_SETTINGS", (("scene", "volume_future_setting"),))
     reason = "this Blender's Cycles has no scene setting 'volume_future_setting' (it needs Blender 5.0 or newer)"
     assert ("label", reason) in draw(blender, blender.types.CYCLES_RENDER_PT_volumes, context)
     assert not blender.ops.xsl.preview_auto_volumes.poll()

@@ -32,8 +32,11 @@ def digest(path) -> str:
 
 
 @pytest.mark.render
-def test_all_modes(cli, fog_blend, tmp_path):
+def test_all_modes(cli, blender, fog_blend, tmp_path):
     before = digest(fog_blend)
+    blender.context.scene.cycles.samples = own_samples = 3
+    own_blend = tmp_path / "own.blend"                         # the scene with 3 samples of its own
+    blender.ops.wm.save_as_mainfile(filepath=str(own_blend), copy=True)
     map_path = write_exr(tmp_path / "xsl.exr", radial_map(W, H, 0.3))
     out = tmp_path / "out"
     result = cli("render", fog_blend, "--mode", "xsl", "--max-spp", "8", "--tile-size", "16",
@@ -43,7 +46,9 @@ def test_all_modes(cli, fog_blend, tmp_path):
     assert "xsl [" in result.stderr and "ETA" in result.stderr          # progress lines (not a TTY)
     stats = json.loads((out / "xsl.json").read_text())
     assert stats["mode"] == "xsl" and stats["resolution"] == [W, H]
-    assert set(stats["phases_s"]) == {"maps", "plan", "renders", "composite", "denoise", "write"}
+    # auto's choice is the default (--estimator scene: the file's own settings).
+    assert set(stats["phases_s"]) == {"estimator", "maps", "plan", "renders", "composite", "denoise", "write"}
+    assert stats["options"]["estimator"] == "auto"
     assert stats["wall_s"] == pytest.approx(sum(stats["phases_s"].values()))
     assert stats["renders"] == len(stats["tiles"]) == stats["plan"]["renders"] > 1
     assert stats["total_samples"] == stats["plan"]["total_samples"]
@@ -72,6 +77,12 @@ def test_all_modes(cli, fog_blend, tmp_path):
     assert result.returncode == 0, result.stderr
     assert read_image(out / "gold.exr").shape == (18, 32, 4)
     assert "gold: 32x18, mean 8.00 spp in 1 render(s)" in result.stdout
+    # Without --max-spp a count is the scene's own samples (uniform's too, without a budget).
+    result = cli("render", own_blend, "--mode", "uniform", "--estimator", "scene", "--out", out / "own.exr",
+                 "--resolution", "32x18", "--stats", out / "own.json")
+    assert result.returncode == 0, result.stderr
+    own = json.loads((out / "own.json").read_text())
+    assert (own["max_spp"], own["mean_spp"], own["options"]["estimator"]) == (own_samples, own_samples, "scene")
     assert digest(fog_blend) == before                       # the .blend is never written
     assert not list(out.glob(".*partial*"))
 
@@ -90,11 +101,11 @@ def nan_map(path):
     (["--mode", "xsl", "--max-spp", "4", "--min-spp", "5", "--map", "nan.exr"], "larger than --max-spp"),
     (["--mode", "xsl", "--max-spp", "4", "--tile-size", "4", "--map", "nan.exr"],
      "argument --tile-size: must be a whole number from 8 to"),
-    (["--mode", "xsl", "--max-spp", "4", "--wl", "-1"], "--wl must be a number >= 0"),
+    (["--mode", "xsl", "--max-spp", "4", "--wl", "-1"], "--wl: must be at least 0, not -1"),
     (["--mode", "xsl", "--max-spp", "4", "--map", "missing.exr"], "no such director map"),
     (["--mode", "xsl", "--max-spp", "4", "--map", "nan.exr"], "NaN"),
-    (["--mode", "uniform", "--max-spp", "4"], "needs --spp N"),
-    (["--mode", "adaptive", "--max-spp", "4"], "needs --budget-from"),
+    (["--mode", "uniform", "--spp", "4", "--equal-time", "2"], "needs either --spp or --equal-time"),
+    (["--mode", "adaptive", "--spp", "4"], "--spp is for --mode uniform"),
     (["--mode", "uniform", "--max-spp", "4", "--budget-from", "missing.json"], "no such stats file"),
     (["--mode", "gold", "--max-spp", "4", "--resolution", "big"], "--resolution"),
     (["--mode", "bogus", "--max-spp", "4"], "invalid choice"),
@@ -140,7 +151,7 @@ def test_ctrl_c_cancels_between_tiles_and_writes_nothing(fog_blend, tmp_path):
     exe = Path(sys.executable).with_name("xsl-render")
     process = subprocess.Popen(
         [str(exe), "render", str(fog_blend), "--mode", "xsl", "--max-spp", "256", "--tile-size", "8",
-         "--map", str(map_path),
+         "--map", str(map_path), "--estimator", "scene",      # the tiles from the first line on
          "--out", str(tmp_path / "o.exr"), "--stats", str(tmp_path / "o.json")],
         stderr=subprocess.PIPE, text=True)
     first = process.stderr.readline()             # the progress bar's first line: rendering began

@@ -53,9 +53,9 @@ assert bpy.ops.xsl.reset_settings() == {"FINISHED"}
 assert (scene.xsl_render.max_spp, scene.xsl_render.tile_size) == (4, 16)
 context = SimpleNamespace(scene=scene, window_manager=bpy.context.window_manager)
 panels = [getattr(bpy.types, name) for name in dir(bpy.types) if name.startswith("RENDER_PT_xsl_render")]
-assert len(panels) == 5 and all(panel.poll(context) for panel in panels)
+assert len(panels) == 6 and all(panel.poll(context) for panel in panels)
 drawn = [entry for panel in panels for entry in draw(bpy, panel, context)]
-assert {"xsl.compute_maps", "xsl.render_selective", "xsl.render_gold", "xsl.compare"} <= {
+assert {"xsl.render_budget", "xsl.compute_maps", "xsl.render_selective", "xsl.render_gold", "xsl.compare"} <= {
     entry[1] for entry in drawn if entry[0] == "operator"}
 before = settings_dump(scene)
 for name in ("compute_maps", "render_selective", "render_gold", "compare"):
@@ -105,7 +105,8 @@ def test_manifest_is_complete():
 @pytest.fixture(scope="module")
 def built_zips(tmp_path_factory):
     out = tmp_path_factory.mktemp("dist")
-    result = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension.py"), "--out", str(out)],
+    # As the README says: python3 run.py build (tools/build_extension.py in the project's .venv).
+    result = subprocess.run([sys.executable, str(ROOT / "run.py"), "build", "--out", str(out)],
                             capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stdout + result.stderr
     return {p.name: p for p in out.glob("*.zip")}

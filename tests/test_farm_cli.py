@@ -122,7 +122,8 @@ def test_bundle_runs_with_openjd_resumes_after_a_killed_task_and_equals_render(c
 
     # The same image as one `xsl-render render` process with the same options and seed.
     reference = tmp_path / "render" / "xsl.exr"
-    result = cli("render", ROAD, "--mode", "xsl", "--frame", "1", "--out", reference, "--quiet", *OPTIONS)
+    result = cli("render", ROAD, "--mode", "xsl", "--frame", "1", "--out", reference, "--quiet",
+                 "--estimator", "scene", *OPTIONS)
     assert result.returncode == 0, result.stderr
     np.testing.assert_array_equal(read_image(files.image), read_image(reference))
     np.testing.assert_array_equal(read_image(files.spp_image), read_image(reference.with_name("xsl_spp.exr")))
@@ -188,7 +189,8 @@ def test_a_chunk_of_frames_is_one_process_per_task_and_equals_render(cli, blende
         assert f"frame {files.frame}: {files.image} written: 32x18" in out
 
     reference = tmp_path / "render" / "f_####.exr"
-    result = cli("render", scene, "--mode", "xsl", "--frames", "1-3", "--out", reference, "--quiet", *CHUNK)
+    result = cli("render", scene, "--mode", "xsl", "--frames", "1-3", "--out", reference, "--quiet",
+                 "--estimator", "scene", *CHUNK)
     assert result.returncode == 0, result.stderr
     images = []
     for files in frames:

@@ -178,7 +178,7 @@ def test_frames_per_task_chunks_every_step_and_a_chunk_expands_to_a_frame_list(t
     renders = job_tasks(decoded(job_template(guided)), openjd_values(parameter_values(guided)),
                         tmp_path)["Render"]
     assert len(renders) == 8 and renders[0]["Frame"] == "1-31:2"     # 125 frames in 8 chunks
-    with refused_in_flags("--frames-per-task must be between 1 and 1000"):
+    with refused_in_flags("--frames-per-task must be a whole number from 1 to 1000"):
         job_template(replace(job, frames_per_task=0))
 
 
@@ -246,7 +246,7 @@ def test_guided_template_is_one_task_per_chunk_with_every_knob_a_parameter(tmp_p
 @pytest.mark.parametrize("changes,message", [
     ({"guided": None}, "--mode guided needs --time-budget"),
     ({"guided": GuidedOptions(time_budget=0.0005)}, "--time-budget must be between 0.001 and"),
-    ({"guided": GuidedOptions(time_budget=float("nan"))}, "--time-budget must be a positive number"),
+    ({"guided": GuidedOptions(time_budget=float("nan"))}, "--time-budget must be a finite number"),
     ({"mode": "xsl"}, "--time-budget is for --mode guided"),
 ])
 def test_bad_guided_farm_jobs(tmp_path, changes, message):

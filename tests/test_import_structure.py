@@ -1,18 +1,10 @@
-"""The import rules of CONTRIBUTING.md, read from the source with ``ast`` (nothing is imported).
-
-- no two modules import each other (nor import each other through a longer circle), and
-  the subpackages of ``core`` and ``addon`` import one way too, the shared helpers at the
-  top of ``core`` importing none of them;
-- ``core`` never imports bpy (or any Blender module) and never ``addon`` or ``operators``;
-  ``addon`` never imports ``operators``;
-- inside the package every import is relative, and every import names a module that exists
-  and, for ``from X import name``, a name X defines: lazy imports inside functions only run
-  with Blender, so a stale one would otherwise wait for the slow tests or a user;
-- ``bench/``, ``tools/`` and ``tests/`` import only modules that exist;
-- pyproject.toml lists every subpackage (setuptools' ``packages``), so installs carry them.
-
-Imports count wherever they stand: at the top, inside functions, under ``if TYPE_CHECKING``.
-"""
+"""The import rules of CONTRIBUTING.md, read from the source with ``ast`` (nothing is imported):
+no two modules import each other, even through a longer circle, and the rooms of ``core`` and
+``addon`` import one way, the shared helpers at ``core``'s top importing none of them; ``core``
+never imports bpy, ``addon`` or ``operators``, and ``addon`` never ``operators``; imports inside
+the package are relative and name modules and names that exist (lazy imports included, which
+would otherwise wait for the slow tests), as do those of ``bench/``, ``tools/`` and ``tests/``;
+pyproject.toml lists every subpackage. Imports count wherever they stand."""
 from __future__ import annotations
 
 import ast

@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import pytest
 from support.cli_wording import refused_in_flags
 
+from xsl_render.core.checks import MAX_SAMPLES
 from xsl_render.core.errors import SettingError
 from xsl_render.core.maps.options import MapOptions
 from xsl_render.core.sampling.guided_plan import GuidedOptions
@@ -63,7 +64,7 @@ def test_a_stills_time_budget_chooses_for_a_modest_count_first(request_, still, 
     (RenderRequest("guided", RenderOptions(max_spp=70000), guided=GUIDED), "--max-spp must be between 1 and 65536"),
     (RenderRequest("adaptive", OPTIONS, noise_threshold=0.0), r"--noise-threshold must be in \(0, 1\]"),
     (RenderRequest("uniform", RenderOptions(max_spp=4, min_spp=8), spp=2), "--min-spp 8 is larger than --max-spp 4"),
-    (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=0.0)), "--time-budget must be a positive"),
+    (RenderRequest("guided", OPTIONS, guided=GuidedOptions(time_budget=0.0)), "--time-budget must be greater than 0"),
 ])
 def test_impossible_requests_are_refused_naming_the_setting(request_, message):
     """(Every rule reads the mode's ``MODE_TRAITS``, not its name.)"""
@@ -84,5 +85,23 @@ def test_the_budget_source_is_recorded():
 
 def test_every_mode_has_its_traits():
     assert set(MODE_TRAITS) == set(MODES) and SELECTIVE_MODES == ("xs", "xsl")
-    assert [mode for mode in MODES if MODE_TRAITS[mode].default_estimator == "auto"] == ["guided"]
     assert {MODE_TRAITS[mode].budget_from for mode in MODES} == {None, "spp", "seconds"}
+
+
+def test_counts_left_to_the_scene_are_its_samples_once_it_is_open():
+    """The command line's counts default to the scene's samples: a request checked before the
+    scene opens, with a stand-in ceiling, gets them (and is checked again) once it is open."""
+    stand_in = RenderOptions(max_spp=MAX_SAMPLES)
+    uniform = RenderRequest("uniform", stand_in, scene_samples=True).check().at_scene_samples(24)
+    assert (uniform.spp, uniform.options.max_spp, uniform.scene_samples) == (24, 24, False)
+    budgeted = RenderRequest("uniform", stand_in, spp=40, scene_samples=True).check().at_scene_samples(24)
+    assert (budgeted.spp, budgeted.options.max_spp) == (40, 40)       # a budget file's count stays
+    timed = RenderRequest("uniform", stand_in, seconds=2.0, scene_samples=True).at_scene_samples(24)
+    assert (timed.spp, timed.options.max_spp) == (None, 24)
+    gold = RenderRequest("gold", RenderOptions(max_spp=MAX_SAMPLES, min_spp=8), scene_samples=True).check()
+    with refused_in_flags("--min-spp 8 is larger than --max-spp 4"):
+        gold.at_scene_samples(4)
+    given = RenderRequest("gold", OPTIONS)
+    assert given.at_scene_samples(24) is given
+    with pytest.raises(SettingError, match="needs either"):          # only a stand-in may lack both
+        RenderRequest("uniform", OPTIONS).check()

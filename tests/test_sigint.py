@@ -1,17 +1,12 @@
 """Ctrl-C from the first instruction to the last (issue 15, point 2): exit 130, one line,
 nothing written, whenever the signal arrives; a kill's leftovers go with the next run.
 
-Each trial is cheap: the command is stopped within a second of its start (or of Blender's),
-long before Blender has rendered anything, and the process ends at once (no clean-up of
-Blender).
-
-"From the first instruction" is the console script's (``operators/entry.py``): before it the
-process is the Python interpreter starting up, and a SIGINT then ends it as Python does (killed
-by the signal, or a KeyboardInterrupt while ``site`` imports). That takes about 25 ms on an idle
-machine, but a loaded one can stretch it past the first delay; so a trial whose moment comes
-before that instruction waits for it (:func:`send_when_ours`) and counts as "late". The test
-does not depend on the load: every trial is a signal at a moment the program answers for.
-"""
+Each trial stops the command within a second of its start (or of Blender's), before anything
+is rendered. "From the first instruction" is the console script's (``operators/entry.py``):
+before it the process is Python starting up, which a SIGINT ends as Python does, and on a
+loaded machine that start can stretch past a trial's moment, so such a trial waits for the
+instruction (:func:`send_when_ours`) and counts as "late": every trial is a signal at a moment
+the program answers for, whatever the load."""
 from __future__ import annotations
 
 import hashlib

@@ -16,14 +16,16 @@ from conftest import EXAMPLES, xsl_render_cli
 from support.fog_scene import saved_fog_scene
 from test_cli_info import one_line_error
 
+from xsl_render.core.sampling.render_stats import RenderStats
 from xsl_render.core.validation.curves import curve_points, monotone_envelope
 from xsl_render.core.validation.results import uniform_curve
 
 pytestmark = [pytest.mark.blender, pytest.mark.render]
 
 W, H = 64, 36
-ALL = ("gold", "x_only", "s_only", "xs", "xsl", "xsl_no_minbound", "uniform_eighth", "uniform_quarter",
-       "uniform_half", "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
+ALL = ("gold", "auto_file_samples", "auto_equal_time", "x_only", "s_only", "xs", "xsl", "xsl_no_minbound",
+       "uniform_eighth", "uniform_quarter", "uniform_half", "uniform_equal_time", "adaptive_equal_time",
+       "guided_equal_time")
 #: A small converged reference keeps the tests quick (the default is 1024 spp).
 REFERENCE = ("--reference-spp", "64")
 TINY = ("--max-spp", "4", "--tile-size", "16", "--no-vdp", "--quiet") + REFERENCE
@@ -176,8 +178,18 @@ def test_demo_end_to_end(tmp_path):
     assert last == f"report: {(out / 'report.html').resolve()}"
     assert (out / "report.html").stat().st_size > 10_000
     runs = results(out)["scenes"]["road"]["runs"]
-    assert tuple(runs) == ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uniform_half",
-                           "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
+    assert tuple(runs) == ("gold", "auto_file_samples", "auto_equal_time", "xs", "xsl", "uniform_eighth",
+                           "uniform_quarter", "uniform_half", "uniform_equal_time", "adaptive_equal_time",
+                           "guided_equal_time")
+    # The main job: the file (gold, its own settings) against Auto Volumes in its time, placed
+    # on the file's curve, shown first in the report.
+    auto, gold = runs["auto_equal_time"], runs["gold"]
+    assert auto["stats"]["estimator"]["estimator"] == "auto" and gold["stats"]["estimator"]["estimator"] == "scene"
+    gold_stats = RenderStats.from_json(json.loads((out / "road" / "gold.json").read_text())["stats"])
+    assert auto["stats"]["time_budget_s"] == pytest.approx(gold_stats.render_seconds)
+    assert runs["auto_file_samples"]["mean_spp"] == gold["mean_spp"] == 4
+    report = (out / "report.html").read_text()
+    assert report.index("The file and Auto Volumes in the same time") < report.index("Director maps")
     assert runs["xsl"]["metrics"]["flip"]["mean_flip"] > 0
     assert runs["xsl"]["reference_metrics"]["flip"]["mean_flip"] > 0
     # xsl is placed on the uniform curve (gold and the uniform runs). Its renders of a few

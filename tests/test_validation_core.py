@@ -43,6 +43,7 @@ def test_paper_versions():
     ("xs", ("gold", "xs")),                                       # gold always comes along
     ("adaptive_equal_time", ("gold", "xsl", "adaptive_equal_time")),  # and the run it times by
     ("guided_equal_time", ("gold", "xsl", "guided_equal_time")),
+    ("auto_equal_time", ("gold", "auto_equal_time")),              # Auto Volumes takes gold's time
     ("xsl, gold ,xs", ("gold", "xs", "xsl")),                     # plan order, spaces ignored
 ])
 def test_parse_variants(text, expected):
@@ -58,7 +59,8 @@ def test_parse_variants_refuses_unknown(text):
 def test_minbound_comparison_only_with_xsl():
     names = [v.name for v in scene_variants(DEFAULT_VARIANTS, compare_minbound=True)]
     assert names.index("xsl_no_minbound") == names.index("xsl") + 1
-    assert names[0] == "gold" and names[-3:] == ["uniform_equal_time", "adaptive_equal_time", "guided_equal_time"]
+    assert names[:3] == ["gold", "auto_file_samples", "auto_equal_time"]
+    assert names[-3:] == ["uniform_equal_time", "adaptive_equal_time", "guided_equal_time"]
     assert "xsl_no_minbound" not in [v.name for v in scene_variants(DEFAULT_VARIANTS)]
     assert [v.name for v in scene_variants(("gold", "xs"), compare_minbound=True)] == ["gold", "xs"]
 

@@ -1,24 +1,14 @@
-"""The X map where volume faces coincide with surfaces or each other, where the camera sits
-on a boundary or its clip start inside a volume, and where Cycles' camera-in-volume rules
-differ from "is the camera inside the mesh" (issue 14). Each test states what Cycles itself
-renders there, found with the oracle; X must agree with it (MAE <= 0.01, 99th percentile
-<= 0.05 over non-silhouette pixels, ``xmap_scenes.OracleComparison``).
+"""The X map where volume faces coincide with surfaces or each other, where the camera sits on a
+boundary or its clip start inside a volume, and where Cycles' camera-in-volume rules differ
+from "is the camera inside the mesh" (issue 14). Each test states what Cycles itself renders
+there, found with the oracle, and X must agree (MAE <= 0.01, 99th percentile <= 0.05 over
+non-silhouette pixels).
 
-What Cycles does (``core.maps.volume_stack``):
-
-* a volume face lying exactly on a surface or on another volume's face is a tie: each
-  sample processes one of the two faces and skips the other when both sit at the same
-  float distance, so part of the samples pass through the floor under a fog box resting
-  on it (here about half of them), nearly all pass through a water surface that is a
-  copy of the water box's top face, and two identical boxes count as one. Which samples
-  meet both faces at the same float is Embree's arithmetic, replayed for the fog box
-  (``core.maps.embree_ties``); which face wins then is Embree's tree, which probes
-  measure: on a subdivided floor, the floor wins every time;
-* whether a ray starts inside an object volume comes from a gate (the near plane's box
-  against the objects' boxes) and a probe straight up, not from the ray itself: a camera
-  under an open "ocean" plane with a volume material is outside it, and so is a camera
-  inside a box whose top face has a surface-only material.
-"""
+Cycles' rules (``core.maps.volume_stack``): a volume face exactly on a surface or another
+volume's face is a tie, part of the samples passing (under a fog box resting on the floor,
+which share is Embree's arithmetic, ``core.maps.embree_ties``, and its tree, which probes
+measure); whether a ray starts inside a volume comes from a gate and a probe straight up, not
+from the ray itself."""
 from __future__ import annotations
 
 import math

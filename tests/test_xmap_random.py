@@ -1,17 +1,10 @@
 """The randomized X-map oracle suite (issue 14): for each seed, a small scene from
-``random_scenes`` (volumes resting on, beside and inside things, nested and coincident;
-world volume; camera inside, outside, on a boundary, clip start inside; perspective with
-shift or orthographic; constant, noise- and gradient-driven densities; an OpenVDB grid)
-and its X map against the Cycles oracle at 64x36: mean absolute error <= 0.01 and 99th
-percentile <= 0.05 over the pixels with a surface that are not silhouettes
-(``xmap_scenes.silhouettes``: a 3x3 neighbourhood holding sky and a surface, or a depth
-discontinuity).
+``random_scenes`` and its X map against the Cycles oracle at 64x36: mean absolute error <= 0.01
+and 99th percentile <= 0.05 over the non-silhouette pixels with a surface.
 
-A handful of seeds runs with the suite; all 50 run with ``-m slow`` (about five minutes on
-two cores; ``bench/bench_xmap_oracle.py`` prints the worst seed's figures). A seed that
-fails becomes a named test in ``test_xmap_coincident.py`` (or next to the code at fault)
-before it is fixed.
-"""
+A handful of seeds runs with the suite; all 50 with ``-m slow`` (``bench/bench_xmap_oracle.py``
+prints the worst seed's figures). A seed that fails becomes a named test in
+``test_xmap_coincident.py`` (or next to the code at fault) before it is fixed."""
 from __future__ import annotations
 
 import pytest

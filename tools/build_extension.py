@@ -1,20 +1,13 @@
-"""Download the pinned wheels and build the Blender extension zips.
+"""Download the pinned wheels and build the Blender extension zips (``python3 run.py build``).
 
     python tools/build_extension.py [--out DIR] [--sync-manifest] [--skip-download]
 
-1. Reads the lines tagged ``# wheel`` in requirements.lock (the one place versions are pinned).
-2. Downloads each as a binary wheel for every platform of the manifest into ``wheels/``
-   (``pip download --only-binary=:all: --platform ...``; nothing is ever compiled).
-3. Checks that the manifest's ``wheels`` list names exactly those files
-   (``--sync-manifest`` rewrites the list instead), and that its Blender range
-   (``blender_version_min`` to ``blender_version_max``, the latter exclusive) holds only
-   Blender releases whose Python the binary wheels are built for (``check_blender_range``).
-4. Validates the repository root with Blender's own ``blender_ext.py validate`` and builds
-   one zip per platform with ``blender_ext.py build --split-platforms`` into DIR (``dist/``).
-
-Blender's extension tool ships inside the bpy wheel, so run this with the project's
-``.venv`` Python (``python3 run.py test`` creates it).
-"""
+The lines tagged ``# wheel`` in requirements.lock are downloaded as binary wheels for every
+platform of the manifest (never compiled); the manifest's ``wheels`` list must name exactly
+them (``--sync-manifest`` rewrites it) and its Blender range hold only releases whose Python the
+wheels are built for; then Blender's own ``blender_ext.py`` validates the repository and builds
+one zip per platform into DIR (``dist/``). Run it with the project's ``.venv`` Python, which
+holds Blender's extension tool."""
 from __future__ import annotations
 
 import argparse

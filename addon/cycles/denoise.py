@@ -1,31 +1,16 @@
 """Denoise a whole frame with the denoiser Cycles itself uses (Intel Open Image Denoise).
 
-Why after compositing and not per tile: OIDN looks at a neighbourhood of every pixel, so
-denoising rectangles one by one would seam at their edges. Every render mode (gold,
-selective, uniform, adaptive) goes through this one function with the same settings, so
-comparisons stay fair: path-traced images at 16-64 samples are dominated by noise (two
-gold renders with different seeds differ by mean FLIP ~0.17 at 16 spp), which is not what
-an artist looks at; after denoising they differ by ~0.045.
-
-OIDN is called directly from the library Blender ships (``oidn_library``), set up as the
-compositor's Denoise node sets it up (Quality High, HDR, the file's prefilter), with the
-same result bit for bit (tests/test_denoise.py). Going through the compositor (a temporary scene
-rendered for its compositing, the fallback where the library cannot be loaded) would make
-Cycles sync the rendering scene again at its next render: a whole octree build on
-heterogeneous fog, in the middle of a guided render or between an animation's frames.
-
-The guides' prefilter follows the file's own denoiser (``selective_render.guide_prefilter``)
-in every mode and in the converged reference: Blender 5's default, "Accurate", denoises the
-albedo and normal guides first (in fog Cycles writes them at the first scattering event, so
-they are as noisy as the image, and OIDN would keep that noise as detail); "Fast" takes
-them as they are (OIDN's cleanAux off). So a run is denoised as the artist's own render of
-the file would be, and a comparison with the file measures the estimator, not the denoise.
-
-Light too strong for 32-bit floats: infinite or NaN values are set to 0 first, as Cycles
-sets a non-finite sample (``core.sampling.finite_pixels``; one Inf spreads over OIDN's
-output). And OIDN's HDR auto-exposure sums each bin's luminance in 32-bit floats, so a frame
-whose values reach about 1e36 (an emitter of 1e37 seen through fog) comes back all black: such
-a frame is scaled by a power of two (exact) to at most ``OIDN_PEAK`` before and back after.
+After compositing, never per tile: OIDN looks at a neighbourhood of every pixel, so
+rectangles denoised one by one would seam. Every mode goes through this one function, so
+comparisons stay fair. OIDN is called directly from the library Blender ships
+(``oidn_library``), set up as the compositor's Denoise node (Quality High, HDR, the file's
+prefilter), bit for bit the same; going through the compositor would make Cycles sync the
+scene again at its next render. The guides' prefilter follows the file's own denoiser in every
+mode and in the converged reference (``selective_render.guide_prefilter``: Accurate, Blender
+5's default, denoises the albedo and normal guides first, which in fog are as noisy as the
+image), so a comparison with the file measures the estimator, not the denoise. Non-finite
+values are set to 0 first, and a frame too bright for OIDN's 32-bit auto-exposure is scaled by
+a power of two before and back after (``OIDN_PEAK``).
 """
 from __future__ import annotations
 

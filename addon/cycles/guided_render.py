@@ -1,59 +1,15 @@
 """A render that spends a time budget where the denoised frame will keep its error
-(``--mode guided``).
+(``--mode guided``), every setting put back after success, error or cancel.
 
-1. Importance, when asked for: the X, XS or XSL director map, computed by the caller
-   (``addon/maps/director_maps.named_map``) inside the budget: its seconds are passed in.
-2. Scene sync (a 1-sample render of a few pixels), inside the budget like everything else
-   (outside it for a frame of an animation, whose sequence pays it back: ``pace``). A later
-   frame of an animation (default allocation) skips 3-5: the frame before measured what a
-   full-resolution sample costs, so it renders the whole frame once, at the frame before's
-   count while that fits (``SequenceBudget.steady_count``: a count that changes from frame to
-   frame shows as flicker).
-3. Pilot: the whole frame at a quarter of its resolution, one sample, then at most 16 for at
-   most a small share of the budget (2 % when nothing is scored); the two renders' times
-   give the cost of a sample without a render's fixed cost, and so the count the budget
-   affords. ``--estimator auto`` chose before, for the ceiling but at most 16 spp
-   (``RenderRequest.first_estimator_spp``; the pilot renders with that choice, or with ray
-   marching where it was null scattering: ``provisional_choice``); its choice is now settled
-   for the affordable count (``settled_for``: a finer step predicted where the count is
-   larger), and where that differs the scene syncs again and the pilot is rendered again.
-   (A range keeps the ceiling's choice: it pays null scattering's octree once, see
-   ``guided_steps``.) The first frame of a range pilots at full resolution instead
-   (``_RANGE_PILOT_SPP``): its count is the one the whole range holds.
-4. Scores (``exponent`` > 0 only): the pilot denoised, its display luminance's gradient per
-   tile (``core/sampling/guided_plan``, which also says why the pilot is thrown away and why
-   the default spreads the samples evenly instead).
-5. Final pass: per rectangle, its samples from the first, as many as fit in what is left of
-   the budget once the final denoise is set aside; a pacer rescales every next rectangle to
-   the clock, at the rate the finished rectangles showed. A flat plan (nothing scored, no
-   importance map: the default) is three columns of the frame, each later one's count set by
-   what those before it cost at full resolution (a quarter-resolution pilot's renders of a
-   few tens of milliseconds misjudge a full frame's cost per pixel by up to 2x, either way:
-   their timing noise); the
-   later columns keep the count before them while the clock allows, raised only where the
-   pilot priced the first too dear (``column_count``: the later columns spend the time it
-   left), and a count up to
-   1.5x a power of two renders at it
-   (``sobol_friendly``). Every pixel is rendered in exactly one Cycles session. (One render
-   of the whole frame stopped by Cycles' own time limit instead of the columns was measured
-   on the four example scenes, medians of 3: a tie, 0.87x of auto's uniform curve on mean
-   FLIP against the columns' 0.84x, each scene and budget within the run-to-run spread;
-   Cycles' time-limited render paid 5-15 % more per sample. The whole frame in two renders
-   of one sample sequence, the second sized by what the first cost and continuing it with
-   Cycles' sample subset, tied too: within 3 % of the columns' FLIP; and it cannot continue
-   a blue-noise sequence, which Cycles lays out by the render's own sample count. README,
-   "The guided sampler's default".) The first frame of a range renders the whole frame in
-   one render instead: with blue noise and null scattering, a later frame rendered after
-   windows had other (worse) pixels than a fresh render at its count.
-6. The rectangles composited with their denoising guides (``PassAccumulator``), denoised once.
-   The time set aside for it is the prefiltered denoise's where the file's denoiser
-   prefilters its guides (``selective_render.guide_prefilter``), else the plain one's; a
-   later frame of a range sets aside what the frames before measured.
-
-A still's count may be raised to the power of two above it where ``BUDGET_OVERRUN`` of its
-budget reaches it (``still_count``), as a range's may.
-
-Every setting touched is put back (``preserved_scene``) after success, error or cancel.
+Inside the budget: the importance map asked for (computed by the caller), the scene's sync,
+a pilot (the whole frame at a quarter of its resolution, 1 and a few samples: their times
+price a sample and so the count the budget affords; auto's choice is settled for that count,
+``settled_for``), then the final pass in three columns of the frame, each paced by what
+those before it cost at full resolution, a count up to 1.5x a power of two rendered at it
+(``sobol_friendly``), and one denoise of the whole frame as the file's denoiser would. A later
+frame of a range knows what a sample costs and renders the whole frame once at the frame
+before's count while it fits (``SequenceBudget``); the first frame of a range pilots at full
+resolution and renders whole. What each choice measured: docs/performance.md, "Guided".
 """
 from __future__ import annotations
 
@@ -166,7 +122,6 @@ def guided_steps(scene, options: RenderOptions, guided: GuidedOptions,
     them to the frames after it, which find the scene synced); what its final pass cost per
     sample is told to ``pace`` for the next frame, which renders without a pilot."""
     sync_outside = pace is not None
-    guided.check()
     budget = guided.time_budget
     # Auto's estimator prediction ran before, inside the budget like the importance map.
     chosen = options.volume_estimator()

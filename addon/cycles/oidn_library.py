@@ -1,17 +1,12 @@
 """Open Image Denoise called directly, from the library Blender itself ships and denoises with.
 
-Why not the compositor: a Blender render of any other scene (the compositor's Denoise node
-runs inside one) and any datablock created or removed make Cycles sync the rendering scene
-from scratch at its next render, persistent data or not: 3.4-12 s on the noise-fog example
-scenes, where Blender 5 rebuilds the volume octree. A denoise between two renders of one
-session (the guided sampler's pilot, the frames of an animation) must not touch Blender.
-
-The library is OIDN 2's C API (``oidnNewDevice``, ``oidnNewFilter("RT")``,
-``oidnSetSharedFilterImage``...), loaded from Blender's own lib folder (the bpy module's, or
-the running Blender's); ``load()`` returns None where it cannot be found, and the caller
-falls back to the compositor. ``addon.cycles.denoise`` sets it up exactly as the compositor's
-Denoise node is set up there (a test compares the two).
-"""
+Not the compositor: a Blender render of another scene (the compositor's Denoise node runs in
+one) and any datablock created or removed make Cycles sync the rendering scene from scratch
+at its next render (the volume octree again, on heterogeneous fog). A denoise between two
+renders of one session (a pilot, an animation's frames) must not touch Blender. The library
+is OIDN 2's C API, loaded from Blender's own lib folder; ``load()`` returns None where it
+cannot be found, and the caller falls back to the compositor. ``addon.cycles.denoise`` sets
+it up exactly as the compositor's Denoise node (a test compares the two)."""
 from __future__ import annotations
 
 import ctypes

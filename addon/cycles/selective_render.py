@@ -1,22 +1,12 @@
 """Selective rendering (the paper's section 5) and the baselines it is measured against.
 
-``render_selective(scene, director_map, options)`` is the core: the director map (values in
-[0, 1] at render resolution) scales ``options.max_spp`` per pixel;
-``core.sampling.tile_plan`` turns that into rectangles, each rendered by Cycles with its own
-samples, and ``core.sampling.composite`` puts them together (``selective_steps`` is the same
-run as steps, for the Blender panel's modal operator). The baselines:
-
-- ``render_gold``: ``max_spp`` everywhere, one ordinary Cycles render (the gold standard);
-- ``render_uniform``: one ordinary render with the same total samples as a selective run
-  (equal cost), or for a given wall time (Cycles' time limit);
-- ``render_adaptive``: Cycles' own adaptive sampling (noise threshold, ``max_spp`` as the
-  ceiling) stopped by Cycles' time limit at the wall time of a selective run: what a Blender
-  user would do instead.
-
-Every function leaves the scene exactly as it found it (``preserved_scene``), after success,
-an error or a cancel, and returns a ``RenderOutcome``: the image, the samples per pixel and
-the statistics of the run (the ``--stats`` JSON).
-"""
+``render_selective`` scales ``options.max_spp`` per pixel by the director map; the tile plan
+(``core.sampling.tile_plan``) turns that into rectangles, each rendered by Cycles with its own
+samples and composited (``selective_steps``: the same run as steps, for the panel). The
+baselines: ``render_gold`` (``max_spp`` everywhere), ``render_uniform`` (one count everywhere,
+or as many as a wall time allows, by Cycles' time limit) and ``render_adaptive`` (Cycles'
+adaptive sampling, stopped by its time limit). Each leaves the scene as it found it
+(``preserved_scene``) and returns a ``RenderOutcome``: image, samples per pixel, statistics."""
 from __future__ import annotations
 
 import time
@@ -59,9 +49,9 @@ class RenderOutcome:
 def prepare_render(scene, options: RenderOptions) -> tuple[int, int, list[str]]:
     """Apply the resolution option, check the camera, warn about a non-Cycles engine.
 
-    Must run inside ``preserved_scene``. Returns (width, height, warnings).
+    Must run inside ``preserved_scene``. Returns (width, height, warnings). The options were
+    checked where they were made.
     """
-    options.check()
     if options.resolution is not None:
         scene.render.resolution_x, scene.render.resolution_y = options.resolution
         scene.render.resolution_percentage = 100

@@ -1,32 +1,13 @@
 """Render windows of the frame with Cycles, many times in a row, with little fixed cost.
 
-One ``CyclesWindowRenderer`` per run, used inside ``addon.scene.state.preserved_scene``
-(every setting changed here is put back by that block):
-
-- persistent data on, so the scene is synced and its BVH built once for all windows;
-- a render border cropped to the window for each render; one temporary folder for all;
-- a plain EXR of the Combined pass (a multilayer one with Cycles' sample-count pass when
-  adaptive sampling or a time limit makes the count per pixel unknown in advance, and with
-  the denoising albedo and normal when the frame is to be denoised afterwards);
-- a fixed seed, no denoiser, no time limit, the sample count on the view layer, no compositor, no
-  sequencer, no stamp: the pixels are Cycles' own path-traced estimate, reproducible.
-
-Changing ``scene.cycles.samples`` (an add-on property) does not tag the scene for a depsgraph
-update, so with persistent data Cycles kept rendering the old count; tagging the scene makes
-Cycles re-sync everything, which costs 3.7 s per render on balls_b (Blender 5 rebuilds the
-heterogeneous volumes' octree). The count therefore goes through the view layer's own sample
-override (``cycles.use_layer_samples = "USE"``, ``view_layer.samples``), which Cycles reads at
-every render without a re-sync (0.03 s). Other settings (adaptive sampling, time limit) still
-tag the scene when they change (once per run), except the adaptive noise threshold, which
-Cycles reads at every render too and which changes from one rectangle to the next, and the
-time limit when the sample count changes with it (a new count resets Cycles' session, which
-reads the limit again); the count Cycles reports in the EXR header is checked against the
-one asked for.
-
-The whole frame may also be rendered at a fraction of its resolution (``reduce``: a cheap
-preview of where the image has detail); the resolution changes for that render only and is
-set back after it, and Cycles keeps the synced scene through it (no re-sync on balls_b).
-"""
+One ``CyclesWindowRenderer`` per run, inside ``preserved_scene``: persistent data on (the
+scene synced once for all windows), a border cropped to each window, a plain EXR of the
+Combined pass (multilayer where the count per pixel or the denoising guides are needed), a
+fixed seed and no denoiser, compositor or stamp, so the pixels are Cycles' own estimate. The
+sample count goes through the view layer's override, which Cycles reads at every render:
+``scene.cycles.samples`` does not tag the scene, and tagging it would re-sync everything (the
+volume octree again). The whole frame may also be rendered at a fraction of its resolution
+(``reduce``) without a re-sync."""
 from __future__ import annotations
 
 import re

@@ -1,28 +1,13 @@
 """The Blender side of a farm job's tasks: the maps of a chunk of frames, a share of each of
 their rectangles, or (a guided job) the whole frames, each within its time budget.
 
-A task takes a chunk of frames (the job template's ``FramesPerTask``) and renders them one
-after another in one Blender process, so the scene is opened once and Cycles syncs it once
-per chunk: with persistent data a later frame syncs only what changed (a moving camera), not
-the heterogeneous fog's volume octree (3.5 s on balls_b when the machine is idle; a later
-frame of the chunk reports under 0.01 s). Each
-frame is kept as soon as it is done, so a task killed mid-chunk and run again renders only
-the frames (or rectangles) it had not finished.
-
-What is done already and what a task owns is decided in ``core`` (``core.farm.files``,
-``core.farm.task_groups``, ``core.farm.frame_outputs``) before Blender opens the scene, so a
-task with nothing left to do returns at once; only where the job's record of the files its
-scene reads no longer holds is the scene opened first, to list them (``scene_digest``). The pixels come from
-``selective_render.render_rect`` and the dispatcher (``render_dispatch``), the same code
-``xsl-render render`` uses, so the farm's frame equals a single-process render of the plan
-(selective), or is the render ``xsl-render render --mode guided`` makes (guided).
-
-``device`` (the job's Device: CPU or GPU) is set on the opened copy of the scene, never
-written; None keeps the scene's own. ``progress`` gets (fraction of the chunk, message
-naming the frame) as the task goes (the farm-task command prints them as Open Job
-Description's progress and status lines). Each task returns one ``TaskOutcome`` per frame,
-in the order of ``frames``.
-"""
+A task renders its chunk one frame after another in one Blender process, so the scene is
+opened once and Cycles syncs it once per chunk; each frame is kept as soon as it is done, so
+a task run again renders only what it had not finished. What is done already is decided in
+``core`` (``core.farm.files``, ``task_groups``, ``frame_outputs``) before Blender opens the
+scene. The pixels come from the code ``xsl-render render`` uses, so the farm's frame equals a
+single-process render. ``device`` is set on the opened copy, never written; ``progress`` hears
+(fraction of the chunk, message); each task returns one ``TaskOutcome`` per frame."""
 from __future__ import annotations
 
 import os

@@ -1,17 +1,11 @@
-"""The snapshot of section 4.2: a fast Cycles render with direct lighting only, no media.
+"""The snapshot of section 4.2: a fast Cycles render with direct lighting only, no media, which
+(with the inverted X map) feeds the saliency model.
 
-The paper computes "an estimate (snapshot) of the scene, where only direct lighting is
-computed using ray tracing" and no participating medium, and feeds it (plus the inverted X
-map) to the saliency model. Here: Cycles with zero bounces (camera ray, surface, light
-samples), volumes off (view layer flag, and the world's volume unplugged on a temporary copy
-of the world), a few samples with a fixed seed, denoised (Open Image Denoise, guided by albedo and normal: a
-4-sample render plus denoising costs less than the 16+ samples it takes for the grain to
-stop registering as texture in the saliency model's feature maps; on balls_a grain alone
-doubled the mean of S). The Emit pass of the same render holds the directly visible
-emissive surfaces, which the 0-LightMap uses for emissive meshes.
-
-Everything runs inside ``preserved_scene``: the scene is left exactly as it was.
-"""
+Cycles with zero bounces, volumes off (the view layer's flag, the world's volume unplugged on
+a temporary copy of the world), a few samples at a fixed seed, denoised: a few samples and a
+denoise cost less than the many it takes for grain to stop reading as texture in the
+saliency model's feature maps. The render's Emit pass holds the emissive surfaces the
+0-LightMap uses. Everything runs inside ``preserved_scene``."""
 from __future__ import annotations
 
 from dataclasses import dataclass

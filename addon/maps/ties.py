@@ -1,24 +1,12 @@
 """The pixels where a volume's face coincides with a surface or another volume's face
 (``CameraRays.ties``): what share of Cycles' samples stops there.
 
-Where the one coincidence is the first surface with a face the ray leaves a mesh volume
-by, and nothing lies behind that surface (a fog box resting on the floor), the share is
-worked out rather than rendered (``core.maps.embree_ties``): per pixel the fraction of
-samples that meet both faces at the same float distance, replayed in numpy, times the
-share of those exact ties Embree resolves in the volume's favour. That share is Embree's
-tree's doing (traced with Embree itself: all of them for a fog box on a one-quad floor,
-none for the same box on a 10x10 grid), which no replay can know, so at most PROBE_MAX
-probe renders of PROBE_SIDE pixels square measure it for the pairs of triangles (they
-also take back the replay's bias, its reciprocal not being the hardware's). Every other
-tie (a face entered on a surface, two volumes' faces, something behind the surface, a
-camera or object Cycles traces differently) is measured by a Cycles render of the box
-around those pixels, as before.
-
-Against the oracle on the fog box resting on the ground: MAE 0.008, p99 0.04 at 32x18
-(the 2048-sample measurement it replaces: 0.0064, 0.021); at 384x216, over 192x128 pixels
-of floor, MAE 0.019, p99 0.094 against a 1024-sample render whose own noise accounts for
-0.008 of that (the 64-sample measurement it replaces: 0.032, 0.106).
-"""
+Where the one coincidence is the first surface with a face a mesh volume is left by, and
+nothing lies behind it (a fog box resting on the floor), the share is worked out in numpy
+(``core.maps.embree_ties``), times the share of exact ties Embree resolves in the volume's
+favour, which depends on Embree's tree and so is measured by at most ``PROBE_MAX`` small
+probe renders. Every other tie is measured by a Cycles render of the box around those
+pixels. Against the oracle: docs/performance.md, "The paper's maps"."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,22 +1,13 @@
-"""Cycles measures the transmittance itself: the truth for tests, and the fallback for
-media numpy cannot evaluate.
+"""Cycles measures the transmittance itself: the truth for tests, and the fallback for media
+numpy cannot evaluate.
 
-The scene is rendered with every surface emitting exactly 1 (white) and nothing else
-lighting anything: lamps hidden, world surface black, no bounces. Each volume shader is
-swapped for a Volume Absorption whose extinction equals the original's, fed by the *same*
-density links (so Cycles evaluates textures, attributes and OpenVDB grids its own way),
-and volume emission is dropped. An absorbing medium neither scatters nor glows, so every
-pixel is exp(-tau) along its ray to the first surface, per RGB channel (pixels that hit
-nothing see the black world: 0). A pixel filter of the smallest width makes every sample
-of a pixel go through its centre, like the X map's rays (Blackman-Harris: Cycles' box
-filter ignores the width and spreads samples over the whole pixel).
-
-Nothing of the user's is edited: materials, node groups and the world are copied, the
-copies assigned for the render (``addon.scene.state``), and everything is put back. The
-copies go into object-linked slots: a material that geometry nodes set on the evaluated
-geometry (Set Material) is what Cycles renders there, and only an object's own slot
-overrides it.
-"""
+Every surface emits exactly 1 and nothing else lights anything (lamps hidden, world black,
+no bounces); each volume shader becomes a Volume Absorption of the same extinction fed by the
+same density links (so Cycles evaluates textures and grids its own way). Every pixel is then
+exp(-tau) to its first surface, per channel; the smallest Blackman-Harris filter sends every
+sample through the pixel's centre, as the X map's rays go. Materials, node groups and the
+world are copied for the render, assigned to object-linked slots (which override what
+geometry nodes set), and everything is put back."""
 from __future__ import annotations
 
 import time

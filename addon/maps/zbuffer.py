@@ -1,22 +1,11 @@
 """Cast the camera's rays into the scene: the Z buffer and the media intervals.
 
-One ``mathutils`` BVH tree holds every surface triangle in world space; each pixel-centre
-ray is cast from its clip start (Cycles starts camera rays there) up to its clip end, and
-stops at the first surface. Each object volume gets its own BVH; rays that reach its
-bounding box are walked through its boundary, entering where they cross a face from the
-front and leaving where they cross one from behind, which gives the intervals inside the
-medium up to the surface. Whether a ray *starts* inside is decided as Cycles decides it
-(``core.maps.volume_stack``): by its camera-in-volume gate and a probe straight up from
-the ray's start through all the object's faces, not by the ray's own first crossing (the
-two differ for open meshes, surface-only faces, flipped normals).
-
-Every volume-face crossing and every first surface is also an *event* of its ray; rays
-with two events of different objects at the same distance are marked in ``ties``: there
-Cycles' answer depends on its rounding. Where the only coincidence is the first surface
-with a face the ray leaves a volume by, ``tie_exit`` names that volume and
-``surface_face`` the surface's triangle (``addon.maps.ties`` works those out without
-rendering them); the X map asks Cycles about the other ties.
-"""
+One ``mathutils`` BVH holds every surface triangle; each pixel-centre ray runs from the clip
+start to its first surface. Each object volume has its own BVH, and rays through its bounding
+box are walked through its boundary (entering across a face from the front, leaving from
+behind); whether a ray starts inside is decided as Cycles decides it
+(``core.maps.volume_stack``). Rays with two events of different objects at the same distance
+are marked in ``ties``, where Cycles' answer depends on its rounding (``addon.maps.ties``)."""
 from __future__ import annotations
 
 import gc

@@ -15,7 +15,7 @@ previews: dict[tuple[int, int], list[str]] = {}
 def draw_switch(layout, scene) -> None:
     """The Auto Volumes switch, greyed out with the reason where Blender lacks its settings,
     and Lock Interface beside it where a render from the interface needs it."""
-    from ..auto_volumes import unsupported
+    from ..cycles.volume_settings import unsupported
 
     reason = unsupported()
     row = layout.row()

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import bpy
 
-from ...core.panel.settings import SETTINGS, builtin_defaults
+from ...core.panel.settings import SETTING_NAMES, builtin_defaults
 from .properties import settings_annotations
 
 ROOT_PACKAGE = __package__.rsplit(".", 2)[0]           # <root>.addon.panel -> <root>
@@ -19,8 +19,8 @@ def _draw(self, context):
                       "(applied at start-up; the panel's preset menu can copy them now).")
     layout.use_property_split = True
     grid = layout.grid_flow(columns=2, even_columns=True)
-    for setting in SETTINGS:
-        grid.prop(self, setting.name)
+    for name in SETTING_NAMES:
+        grid.prop(self, name)
 
 
 XSL_AP_preferences = type("XSL_AP_preferences", (bpy.types.AddonPreferences,), {

@@ -1,16 +1,17 @@
 """The panel's settings on every scene (``scene.xsl_render``) and the run status on the
 window manager (``window_manager.xsl_render_status``, never saved).
 
-The settings are built from ``core.panel.settings.SETTINGS`` when the add-on registers, with
-the extension preferences' values as their defaults: a setting the artist never changed on a
-scene follows the preferences (read at start-up; "Defaults from Preferences" in the preset
-menu copies the current ones).
+The settings are Blender properties built from the options of ``core.option_table`` the
+panel shows (``core.panel.settings``), with the extension preferences' values as their
+defaults: a setting the artist never changed on a scene follows the preferences (read at
+start-up; "Defaults from Preferences" in the preset menu copies the current ones).
 """
 from __future__ import annotations
 
 import bpy
 
-from ...core.panel.settings import AUTO_VOLUMES, SETTINGS, Setting
+from ...core.option_table import Option
+from ...core.panel.settings import AUTO_VOLUMES, SETTINGS, panel_value
 
 
 def path_options() -> set:
@@ -23,19 +24,26 @@ def path_options() -> set:
     return {"PATH_SUPPORTS_BLEND_RELATIVE"}
 
 
-def blender_property(setting: Setting, default=None):
-    """The bpy property of one setting, with ``default`` instead of the built-in one."""
-    value = setting.default if default is None else default
-    common = {"name": setting.label, "description": setting.description}
-    if setting.kind == "enum":
-        return bpy.props.EnumProperty(items=list(setting.items), default=value, **common)
-    if setting.kind == "bool":
+def blender_property(option: Option, default=None):
+    """The bpy property of one option (its label, what it does, its range), with ``default``
+    (a preferences' value) instead of the table's."""
+    value = panel_value(option, option.panel_value) if default is None else default
+    common = {"name": option.label, "description": option.help}
+    if option.kind == "choice":
+        items = [(identifier.upper(), label, text) for identifier, label, text in option.choices]
+        return bpy.props.EnumProperty(items=items, default=value, **common)
+    if option.kind == "bool":
         return bpy.props.BoolProperty(default=bool(value), **common)
-    limits = {key: getattr(setting, key) for key in ("min", "max", "soft_min", "soft_max")
-              if getattr(setting, key) is not None}
-    if setting.kind == "int":
-        limits = {key: int(val) for key, val in limits.items()}
+    low = option.low if option.low is not None else option.above
+    limits = {key: bound for key, bound in (("min", low), ("max", option.high),
+                                            ("soft_min", option.soft_low), ("soft_max", option.soft_high))
+              if bound is not None}
+    if option.kind == "int":
+        limits = {key: int(min(bound, 2 ** 31 - 1)) for key, bound in limits.items()}
         return bpy.props.IntProperty(default=int(value), **limits, **common)
+    if option.above is not None:
+        # Blender's minimum is inclusive: the smallest step above an exclusive bound.
+        limits["min"] = option.above + 0.001
     return bpy.props.FloatProperty(default=float(value), precision=2, step=5, **limits, **common)
 
 
@@ -54,7 +62,8 @@ _SCENE_ONLY = {
 
 def settings_annotations(defaults: dict | None = None) -> dict:
     defaults = defaults or {}
-    return {setting.name: blender_property(setting, defaults.get(setting.name)) for setting in SETTINGS}
+    return {setting.prop or setting.name: blender_property(setting, defaults.get(setting.prop or setting.name))
+            for setting in SETTINGS}
 
 
 def make_settings_class(defaults: dict | None = None) -> type:

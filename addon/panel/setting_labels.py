@@ -3,17 +3,19 @@
 Core raises ``SettingError`` naming settings by their fields (``min_spp``, ``core.errors``);
 the panel's property of the same name (``scene.xsl_render``, ``properties.py``) lends the
 field its label, read from the property group's RNA so that it is the label the artist sees.
-:data:`FIELD_PROPERTIES` names the fields whose property is called otherwise; a field the
-panel has no property for (the command line's ``tile_quantile``) keeps its name.
+:data:`FIELD_PROPERTIES` names the fields whose property is called otherwise (from
+``core.option_table``); a field the panel has no property for (the command line's
+``tile_quantile``) keeps its name.
 """
 from __future__ import annotations
 
 import bpy
 
 from ...core.errors import InputError, SettingError
+from ...core.option_table import OPTIONS
 
-#: Fields whose panel property has another name: field -> property.
-FIELD_PROPERTIES = {"estimator": "volume_estimator"}
+#: Fields whose panel property has another name (the option table's ``prop``): field -> property.
+FIELD_PROPERTIES = {name: option.prop for name, option in OPTIONS.items() if option.prop}
 #: How a label and its value stand together in a message: "Min Samples (8)".
 LABEL_AND_VALUE = "{name} ({value})"
 

@@ -1,10 +1,10 @@
-"""The artist panel: Properties > Render > XSL Selective Rendering (Cycles only).
+"""The artist panel: Properties > Render > XSL Render (Cycles only).
 
-Buttons run ``bpy.ops.xsl.compute_maps / render_selective / render_gold / compare`` (modal,
-ESC cancels; see ``operators/job_operator.py``); the sampler is the paper's director map or
-the guided render within a time budget ("Guided Render"); the sub-panels hold the paper's
-map options and the sampling of ``scene.xsl_render``; the header's menu applies the fog
-presets.
+What pays comes first: Auto Volumes with its preview, then a render within a time budget
+(``bpy.ops.xsl.render_budget``). The paper's system, its maps and selective render, is one
+sub-panel closed by default; the gold standard and Compare are another ("Validate"). Buttons
+run modal operators (ESC cancels; ``operators/job_operator.py``); the presets menu sits on the
+paper's sub-panel.
 """
 from __future__ import annotations
 
@@ -12,8 +12,10 @@ import textwrap
 
 import bpy
 
-from ...core.panel.settings import PRESETS, uses_budget
+from ...core.panel.settings import PRESETS
 from .auto_volumes_ui import draw_preview, draw_switch
+
+PAPER_LABEL = "Perceptual Selective Rendering (Sundstedt 2007)"
 
 
 class XSL_MT_presets(bpy.types.Menu):
@@ -30,11 +32,6 @@ class XSL_MT_presets(bpy.types.Menu):
         layout.operator("xsl.reset_settings", icon="PREFERENCES")
 
 
-def _map_in_use(settings) -> str:
-    """The director map the next render uses: the sampler's, or the guided importance."""
-    return settings.importance if uses_budget(settings) else settings.director
-
-
 class _XSLPanel:
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
@@ -47,46 +44,39 @@ class _XSLPanel:
         return scene is not None and scene.render.engine in cls.COMPAT_ENGINES
 
 
-class RENDER_PT_xsl_render(_XSLPanel, bpy.types.Panel):
-    bl_label = "XSL Selective Rendering"
+def _split(layout):
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
 
-    def draw_header_preset(self, context):
-        self.layout.menu(XSL_MT_presets.bl_idname, text="", icon="PRESET")
+
+def _render_button(layout, settings, idname: str, text: str) -> None:
+    """A render operator's button: the frame, or the frame range with Animation on."""
+    animation = settings.use_animation
+    op = layout.operator(idname, text=text + (" (Frames)" if animation else ""),
+                         icon="RENDER_ANIMATION" if animation else "RENDER_STILL")
+    op.animation = animation
+    op.filepath = settings.filepath if animation else ""
+
+
+class RENDER_PT_xsl_render(_XSLPanel, bpy.types.Panel):
+    bl_label = "XSL Render"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        draw_switch(layout, context.scene)
-        draw_preview(layout, context.scene)
+        layout = _split(self.layout)
+        scene = context.scene
+        draw_switch(layout, scene)
+        draw_preview(layout, scene)
         layout.separator()
-        settings = context.scene.xsl_render
-        layout.prop(settings, "sampler", expand=True)
-        budget = uses_budget(settings)
-        if budget:
-            layout.prop(settings, "time_budget")
-            layout.prop(settings, "importance")
-        else:
-            layout.prop(settings, "director", expand=True)
-
-        column = layout.column(align=True)
-        column.operator("xsl.compute_maps", icon="IMAGE_DATA")
-        row = column.row(align=True)
-        animation = settings.use_animation
-        selective = "Guided Render" if budget else "Selective Render"
-        for idname, text in (("xsl.render_selective", selective), ("xsl.render_gold", "Gold Render")):
-            op = row.operator(idname, text=text + (" (Frames)" if animation else ""),
-                              icon="RENDER_ANIMATION" if animation else "RENDER_STILL")
-            op.animation = animation
-            op.filepath = settings.filepath if animation else ""
-        column.operator("xsl.compare", icon="IMAGE_REFERENCE")
-
+        settings = scene.xsl_render
+        layout.prop(settings, "time_budget")
+        layout.prop(settings, "volume_estimator")
+        _render_button(layout, settings, "xsl.render_budget", "Render Within Budget")
         status = getattr(context.window_manager, "xsl_render_status", None)
         if status is None:
             return
         if status.running:
-            layout.progress(factor=status.fraction, type="BAR",
-                            text=f"{status.label}: {status.message}")
+            layout.progress(factor=status.fraction, type="BAR", text=f"{status.label}: {status.message}")
             layout.label(text="ESC cancels; the scene's settings come back", icon="INFO")
         elif status.last_report:
             box = layout.box()
@@ -94,21 +84,43 @@ class RENDER_PT_xsl_render(_XSLPanel, bpy.types.Panel):
                 box.label(text=line)
 
 
-class RENDER_PT_xsl_render_maps(_XSLPanel, bpy.types.Panel):
-    bl_label = "Director Maps"
+class RENDER_PT_xsl_render_paper(_XSLPanel, bpy.types.Panel):
+    bl_label = PAPER_LABEL
     bl_parent_id = "RENDER_PT_xsl_render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw_header_preset(self, context):
+        self.layout.menu(XSL_MT_presets.bl_idname, text="", icon="PRESET")
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _split(self.layout)
+        settings = context.scene.xsl_render
+        layout.prop(settings, "director", expand=True)
+        column = layout.column(align=True)
+        column.prop(settings, "max_spp")
+        column.prop(settings, "min_spp")
+        layout.prop(settings, "tile_size")
+        layout.prop(settings, "denoise")
+        layout.prop(settings, "importance")
+        column = layout.column(align=True)
+        column.operator("xsl.compute_maps", icon="IMAGE_DATA")
+        _render_button(column, settings, "xsl.render_selective", "Selective Render")
+
+
+class RENDER_PT_xsl_render_maps(_XSLPanel, bpy.types.Panel):
+    bl_label = "Director Maps"
+    bl_parent_id = "RENDER_PT_xsl_render_paper"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = _split(self.layout)
         settings = context.scene.xsl_render
         column = layout.column(heading="XS")
         column.prop(settings, "wx")
         column.prop(settings, "ws")
         column.prop(settings, "xs_op")
         column = layout.column(heading="XSL")
-        column.active = _map_in_use(settings) == "XSL"
+        column.active = settings.director == "XSL" or settings.importance == "XSL"
         column.prop(settings, "wxs")
         column.prop(settings, "wl")
         column.prop(settings, "xsl_op")
@@ -118,13 +130,12 @@ class RENDER_PT_xsl_render_maps(_XSLPanel, bpy.types.Panel):
 class RENDER_PT_xsl_render_light(_XSLPanel, bpy.types.Panel):
     bl_label = "Light Map"
     bl_parent_id = "RENDER_PT_xsl_render_maps"
+    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _split(self.layout)
         settings = context.scene.xsl_render
-        layout.active = _map_in_use(settings) == "XSL"
+        layout.active = settings.director == "XSL" or settings.importance == "XSL"
         layout.prop(settings, "light_auto")
         column = layout.column()
         column.active = not settings.light_auto
@@ -132,24 +143,17 @@ class RENDER_PT_xsl_render_light(_XSLPanel, bpy.types.Panel):
         column.prop(settings, "light_sigma_base")
 
 
-class RENDER_PT_xsl_render_sampling(_XSLPanel, bpy.types.Panel):
-    bl_label = "Sampling"
+class RENDER_PT_xsl_render_validate(_XSLPanel, bpy.types.Panel):
+    bl_label = "Validate"
     bl_parent_id = "RENDER_PT_xsl_render"
+    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        settings = context.scene.xsl_render
+        layout.label(text="The gold standard: Max Samples in every pixel")
         column = layout.column(align=True)
-        # With the time budget, Max Samples is the guided render's per-pixel ceiling.
-        column.prop(settings, "max_spp", **({"text": "Max Samples (ceiling)"} if uses_budget(settings) else {}))
-        row = column.row(align=True)
-        row.active = not uses_budget(settings)
-        row.prop(settings, "min_spp")
-        layout.prop(settings, "tile_size")
-        layout.prop(settings, "volume_estimator")
-        layout.prop(settings, "denoise")
+        _render_button(column, context.scene.xsl_render, "xsl.render_gold", "Gold Render")
+        column.operator("xsl.compare", icon="IMAGE_REFERENCE")
 
 
 class RENDER_PT_xsl_render_animation(_XSLPanel, bpy.types.Panel):
@@ -161,9 +165,7 @@ class RENDER_PT_xsl_render_animation(_XSLPanel, bpy.types.Panel):
         self.layout.prop(context.scene.xsl_render, "use_animation", text="")
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _split(self.layout)
         scene = context.scene
         settings = scene.xsl_render
         layout.active = settings.use_animation
@@ -172,5 +174,5 @@ class RENDER_PT_xsl_render_animation(_XSLPanel, bpy.types.Panel):
                           "(Output properties)", icon="TIME")
 
 
-CLASSES = (XSL_MT_presets, RENDER_PT_xsl_render, RENDER_PT_xsl_render_maps,
-           RENDER_PT_xsl_render_light, RENDER_PT_xsl_render_sampling, RENDER_PT_xsl_render_animation)
+CLASSES = (XSL_MT_presets, RENDER_PT_xsl_render, RENDER_PT_xsl_render_paper, RENDER_PT_xsl_render_maps,
+           RENDER_PT_xsl_render_light, RENDER_PT_xsl_render_validate, RENDER_PT_xsl_render_animation)

@@ -1,23 +1,12 @@
 """What the camera rays can meet, as plain arrays: surfaces, volume boundaries and media.
 
-One pass over the evaluated depsgraph (instances included, objects hidden from the render
-or from camera rays left out) collects, in world space:
-
-* every triangle that stops a camera ray: faces whose material has a surface (or no
-  material, which Cycles renders as its default surface), each with the medium whose
-  volume face it also is (a water box with a glass surface), if any;
-* the boundary of each object volume (faces with a volume-only material are not
-  surfaces: rays pass through them into the medium), the object's other faces (Cycles'
-  camera-in-volume probe counts them, ``core.maps.volume_stack``), and the bounding box
-  of every object with a volume, volume objects included;
-* the media themselves (``core.media.volume_medium.VolumeMedium``), the world volume first; volume
-  objects with the grids their material reads (``addon.scene.volume_grids``), or the reason
-  Cycles must measure them instead.
-
-A digest of the camera and all this geometry keys the ray cache: if it has not changed,
-the Z buffer and the media intervals on disk are still right, whatever the media's
-densities and colours have become.
-"""
+One pass over the evaluated depsgraph (instances included, objects hidden from the render or
+the camera left out) collects in world space every triangle that stops a camera ray (with the
+medium whose face it also is), the boundary and other faces of each object volume (Cycles'
+camera-in-volume probe counts them), every volume's bounding box, and the media themselves
+(``VolumeMedium``, the world's first), or the reason Cycles must measure them instead. A
+digest of the camera and this geometry keys the ray cache: while it holds, the Z buffer and
+the media intervals on disk are right, whatever the media's densities have become."""
 from __future__ import annotations
 
 import hashlib

@@ -1,17 +1,12 @@
 """Leave the user's scene exactly as we found it.
 
-Every render xsl_render makes (the X-map oracle, the snapshot, the light map, the tiles)
-changes settings: engine, samples, border, output path, view-layer flags, materials. All of
-that happens inside ``preserved_scene(scene)``, which records the settings first and puts
-them back afterwards, whether the block finishes, raises, or is cancelled.
-
-Materials and worlds are never edited in place: temporary copies are assigned to the
-slots (``swap_material``) and the originals are put back; every datablock created inside
-the block is removed at the end unless it is handed to ``keep``. A setting of a datablock
-found anywhere else (a medium's material reached through an instance or Geometry Nodes, a
-world) is changed through the block's change record (``scene_changes``), which puts it back
-by identity (``addon.scene.changes``).
-"""
+Every render xsl_render makes changes settings (engine, samples, border, output, view layer,
+materials); all of it happens inside ``preserved_scene(scene)``, which records them first and
+puts them back whether the block finishes, raises or is cancelled. Materials and worlds are
+never edited in place: copies are assigned (``swap_material``), datablocks created inside are
+removed at the end unless kept, and a setting of a datablock found elsewhere (a medium's
+material through an instance) goes through the block's change record, put back by identity
+(``addon.scene.changes``)."""
 from __future__ import annotations
 
 from contextlib import contextmanager

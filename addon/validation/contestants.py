@@ -1,38 +1,13 @@
-"""The renders of ``xsl-render curves``: one function per kind of contestant
-(``core.validation.contestants``), each timed as a whole.
+"""The renders of ``xsl-render curves``: one request maker per kind of contestant
+(``core.validation.contestants``), each run timed as a whole.
 
-Equal fixed costs
------------------
-Every contestant pays the same fixed costs, and all of its own:
-
-- Cycles' one-time start-up in the process (kernels, the denoiser's first call) is paid
-  before any timed run, by ``warm_up``;
-- every run pays its own scene sync (BVH, the heterogeneous volumes' octree): each render
-  function runs inside ``preserved_scene``, which puts ``use_persistent_data`` back when it
-  ends and so frees Cycles' synced scene (measured on balls_b: a second identical render
-  takes as long as the first), and a time-budgeted render syncs inside its budget;
-- a selective run computes its maps from the scene as ``xsl-render render --mode xs/xsl``
-  does (no ray cache), and their time is part of its time.
-
-The time of a run (``run_contestant``) is the wall time of everything it does: maps, scene
-sync, renders, compositing, denoising; writing its files afterwards is not counted.
-
-A contestant renders as ``xsl-render render`` does, not as a copy of it: ``contestant_request``
-turns it into a ``RenderRequest`` and the dispatcher (``addon.render_dispatch``) renders
-that, for a still and over frames alike. Adding a kind: a request maker in ``REQUESTS``
-(``(contestant, options, budget_s) -> RenderRequest``, ``budget_s`` the time budget of a
-contestant with ``time_of``, else None; over frames, a frame's share of it), and a scene
-setup in ``SETUPS`` when the kind is a mode with a Cycles switch turned on (path guiding).
-
-Over frames (``curves --frames``)
----------------------------------
-``run_contestant_frames`` renders a contestant over a list of frames as ``xsl-render render
---frames`` does: the same frame job through ``frames_steps``, one Cycles session for the
-whole range (persistent data on, so the run pays one scene sync, not one per frame), xs and
-xsl with their camera rays cast once and reused while camera and geometry stay still,
-guided sharing the run's budget among its frames (``SequenceBudget``), the volume estimator
-``auto`` chosen per frame. Writing the frames' files (``on_frame``) is not counted in the time.
-"""
+Every contestant pays the same fixed costs, all of its own: Cycles' one-time start-up is
+paid before any timed run (``warm_up``); every run syncs the scene itself (``preserved_scene``
+frees Cycles' session when it ends; a time budget syncs inside itself); a selective run
+computes its maps. A run's time is everything but writing its files. A contestant renders as
+``xsl-render render`` does: ``contestant_request`` makes a ``RenderRequest`` for the dispatcher,
+for a still or over frames (one session for the range, as ``render --frames``). A new kind: a
+request maker in ``REQUESTS``, and a scene setup in ``SETUPS`` where a Cycles switch is turned on."""
 from __future__ import annotations
 
 import shutil
@@ -56,6 +31,8 @@ from ..render_dispatch import request_frame_job
 from ..scene.state import preserved_scene
 
 RequestMaker = Callable[[Contestant, RenderOptions, "float | None"], RenderRequest]
+#: How many times the ceiling a time-limited contestant may render (its clock stops it first).
+TIME_LIMIT_CEILINGS = 16
 
 
 def warm_up(scene) -> None:
@@ -96,6 +73,15 @@ def _guided(contestant: Contestant, options: RenderOptions, budget_s) -> RenderR
                          map_options=MapOptions())
 
 
+def _time_limited(contestant: Contestant, options: RenderOptions, budget_s) -> RenderRequest:
+    """Uniform sampling stopped by Cycles' own time limit at ``budget_s`` seconds (the scene's
+    sync and auto's prediction inside it, the denoise after it), as Blender's Time Limit
+    renders for an artist; up to ``TIME_LIMIT_CEILINGS`` times the ceiling, so that the clock,
+    not the count, stops it."""
+    ceiling = TIME_LIMIT_CEILINGS * options.max_spp
+    return RenderRequest("uniform", replace(options, max_spp=ceiling), seconds=float(budget_s))
+
+
 def _switch_guiding_on(scene) -> None:
     """Cycles' path guiding (surface and volume guiding as the scene has them, Blender's
     defaults: both on). Whether Cycles really used it shows in the image: the curves job
@@ -111,6 +97,7 @@ REQUESTS: dict[str, RequestMaker] = {
     "xs": _selective,
     "xsl": _selective,
     "guided": _guided,
+    "time_limit": _time_limited,
 }
 #: Kinds whose scene is set up before they render (inside the run's ``preserved_scene``).
 SETUPS: dict[str, Callable[[object], None]] = {"guiding": _switch_guiding_on}

@@ -2,34 +2,13 @@
 reference, resumable.
 
 For one scene at one resolution: the reference (given, cached or rendered), then every
-contestant of the chosen curves (``core.validation.contestants``) once per seed, each timed
-as a whole (``addon.validation.contestants``) and compared with the reference (HDR-FLIP,
-MSE, ColorVideoVDP's JOD where installed). The results, medians and equal-quality speedups
-go to DIR/curves.json (``core.validation.curves_results``), DIR/curves.png and
-DIR/report.html.
-
-Layout of DIR::
-
-    curves.json, curves.png, report.html
-    runs/<contestant>_seed<k>.exr    the denoised render
-    runs/<contestant>_seed<k>.json   its record: inputs and their hash, seconds, stats, metrics
-
-A record is written after its image, both atomically, and reused while the hash of its
-inputs is unchanged (the scene file's bytes, size, frame, contestant, seed, budget, Blender
-and denoiser versions); its metrics are redone only when the reference changes.
-
-Over frames (``settings.frames``, ``curves --frames``) every run renders all the frames in
-one Cycles session (``run_contestant_frames``: the frame jobs of ``render --frames``), its
-time the whole run's, and each frame is compared with that frame's converged reference
-(``ensure_references``: each cached on its own); the run's errors are the means over its
-frames, with the flicker and the video JOD of its sequence (``compare_sequence``, as
-``compare`` measures two sequences). A run then keeps its frames in a folder::
-
-    runs/<contestant>_seed<k>/frame_0001.exr ...   each frame, written as it is done
-    runs/<contestant>_seed<k>.json                 its record, written once every frame is
-
-and is reused whole (a run cut short renders again: its time is the whole run's).
-"""
+contestant of the chosen curves once per seed, timed as a whole and compared with the
+reference; the medians and equal-quality speedups go to DIR/curves.json, curves.png and
+report.html. Each run's image and record (``runs/<contestant>_seed<k>``) are written
+atomically and reused while the hash of their inputs holds (scene bytes, size, frame,
+contestant, seed, budget, Blender and denoiser versions). Over frames every run renders the
+whole range in one Cycles session and is measured per frame against that frame's reference,
+with the sequence's flicker and video JOD; it is reused only whole."""
 from __future__ import annotations
 
 import statistics

@@ -1,20 +1,11 @@
 """The converged reference of a scene: looked up in the caches, or rendered and cached.
 
-The render is ``selective_render.render_uniform`` with the reference's samples and seed,
-denoised by the same ``finish_image`` path as every run, at the frame and resolution asked
-for. The key, the defaults and the cache folders are plain data (``core.validation.reference``).
-
-A reference takes minutes (one Cycles render: its progress is reported sample by sample).
-Ctrl-C follows the command line's convention (``operators/interrupt.py``): the first asks to
-stop after the render, which then writes nothing; the second stops at once. Either way the
-cache never holds half an entry: the image and its record go through temporary names, the
-record last.
-
-The references of several frames (``ensure_references``) are rendered one after another in
-one Cycles session: persistent data stays on between them, so a scene whose volumes do not
-move (the street example: only the camera does) builds its volume octree once. Each frame is
-cached as it is done, so a cancelled run keeps every finished frame.
-"""
+The render is ``render_uniform`` with the reference's samples and seed, denoised as every run
+is; its key, defaults and cache folders are ``core.validation.reference``'s. It takes minutes:
+progress is reported sample by sample, and Ctrl-C follows the command line's convention (the
+first asks to stop after the render, which then writes nothing; the second stops at once).
+The cache never holds half an entry. Several frames render one after another in one Cycles
+session, each cached as it is done, so a scene whose volumes stand still builds its octree once."""
 from __future__ import annotations
 
 import time

@@ -2,7 +2,8 @@
 
 For each scene: the director maps, the gold standard, the selective renders (X only, S only,
 XS, XSL, XSL without MinBound where asked), uniform sampling at fractions of the ceiling,
-uniform and Cycles adaptive sampling at the wall time the XSL run took (maps included); MSE,
+uniform and Cycles adaptive sampling at the wall time the XSL run took (maps included), Auto
+Volumes at the file's samples and in the gold standard's time; MSE,
 FLIP and VDP of each against the converged reference (``addon.validation.reference``: cached,
 or rendered once) and, the paper's measure, of each but gold against the gold standard.
 Every finished step is kept on disk with the hash of its inputs (``core.validation.store``)
@@ -26,8 +27,8 @@ from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.render_request import RenderRequest
 from ...core.sampling.render_stats import RenderStats
 from ...core.validation.compare import compare_with_gold
-from ...core.validation.plan import (EQUAL_TIME_SOURCE, GOLD, ValidationSettings, Variant,
-                                    map_seconds, scaled_size, scene_variants)
+from ...core.validation.plan import (AUTO_CEILING_FACTOR, GOLD, ValidationSettings, Variant, map_seconds,
+                                    scaled_size, scene_variants)
 from ...core.validation.reference import default_reference_spp, find_reference
 from ...core.validation.results import scene_summary
 from ...core.validation.store import file_sha256, inputs_hash, read_record, write_record
@@ -35,7 +36,7 @@ from ...core.validation.vdp import vdp_unavailable_reason
 
 #: Relative cost of each step, in gold renders, for the overall progress fraction.
 STEP_WEIGHTS = {"maps": 0.5, "gold": 1.0, "selective": 0.4, "uniform": 0.4, "adaptive": 0.4, "guided": 0.4,
-                "metrics": 0.1}
+                "auto": 1.0, "metrics": 0.1}
 
 
 @dataclass(frozen=True)
@@ -197,10 +198,10 @@ class _SceneRun:
         if variant.kind == "selective":
             inputs["maps_hash"] = self.maps[variant.map_options.minbound][1]
         if variant.equal_time:
-            # XSL's wall time, maps included. A baseline's time limit covers its rendering, so
-            # it gets it without XSL's denoising pass and pays its own on top; guided's budget
-            # covers its whole run, its denoising too, so it gets all of it.
-            source = self.records[EQUAL_TIME_SOURCE]
+            # Its source's wall time (XSL's, maps included; gold's for Auto Volumes). A time
+            # limit covers the rendering, so it gets it without the source's denoising pass
+            # and pays its own on top; guided's budget covers its whole run, its denoising too.
+            source = self.records[variant.time_source]
             timed = RenderStats.from_json(source["stats"])
             inputs["budget_s"] = timed.wall_s if variant.kind == "guided" else timed.render_seconds
             inputs["budget_from_hash"] = source["input_hash"]
@@ -210,9 +211,16 @@ class _SceneRun:
     def request(variant: Variant, options: RenderOptions, inputs: dict) -> RenderRequest:
         """The render request of a variant: the gold standard, a selective render from its
         director map (its stats named after the variant), uniform at a share of the ceiling
-        or at XSL's time, Cycles' adaptive sampling at XSL's time, or guided in XSL's time
-        with auto's estimator (as ``render --mode guided`` does by default), the ceiling
-        every run has."""
+        or at XSL's time, Cycles' adaptive sampling at XSL's time, guided in XSL's time, or
+        Auto Volumes (uniform with auto's estimator) at the file's samples or in its time
+        (up to ``AUTO_CEILING_FACTOR`` times the ceiling, so that Cycles' time limit stops it),
+        the ceiling every other run has."""
+        if variant.kind == "auto":
+            auto = replace(options, estimator="auto")
+            if variant.spp_fraction is not None:
+                return RenderRequest("uniform", auto, spp=variant.spp(options.max_spp))
+            return RenderRequest("uniform", replace(auto, max_spp=AUTO_CEILING_FACTOR * options.max_spp),
+                                 seconds=inputs["budget_s"])
         if variant.kind == "gold":
             return RenderRequest("gold", options)
         if variant.kind == "selective":
@@ -246,7 +254,7 @@ class _SceneRun:
         director, map_seconds = None, 0.0
         if variant.kind == "selective":
             director, _, map_seconds = self.director(variant)
-        job = request_frame_job(self.request(variant, options, inputs), director_map=director,
+        job = request_frame_job(self.request(variant, options, inputs).check(), director_map=director,
                                 map_seconds=map_seconds, progress=progress)
         outcome = run_steps(job(scene), progress).outcome
         self.warnings += outcome.warnings

@@ -1,19 +1,11 @@
 """The files a scene reads, as a job bundle's ``asset_references.yaml``.
 
-A farm copies a job's inputs to its workers (AWS Deadline Cloud's job attachments upload
-every file listed under ``assetReferences.inputs``); a fog scene rendered from its .blend
-alone loses its OpenVDB caches, textures and linked libraries. The list comes from Blender
-(``addon.scene.external_files``: ``bpy.utils.blend_paths``), as paths whose numbered parts
-are still patterns; here they become files:
-
-- a UDIM or UV-tile image (``<UDIM>``, ``<UVTILE>`` in its path) is one file per tile;
-- a sequence (an OpenVDB cache per frame, an image sequence) is every file of its folder
-  that differs from the named one only in the last run of digits of its name, as Blender
-  reads a sequence (``BLI_path_sequence_decode``).
-
-Paths that are absolute inside the .blend are reported: Blender does not apply a farm's
-path mapping, so a worker finds such a file only where the same path exists.
-"""
+A farm copies a job's inputs to its workers; a fog scene rendered from its .blend alone loses
+its OpenVDB caches, textures and libraries. Blender lists them (``bpy.utils.blend_paths``)
+with their numbered parts as patterns; here they become files: a UDIM image one per tile, a
+sequence every file of its folder that differs only in the last run of digits (as Blender
+reads a sequence). Paths absolute inside the .blend are reported: a worker finds such a file
+only where the same path exists."""
 from __future__ import annotations
 
 import os

@@ -16,7 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import SettingError
-from .farm_job import DEFAULT_FRAMES_PER_TASK, DEFAULT_TASK_TIMEOUT, DEVICES, check_frames_per_task, parse_frames
+from ..option_table import DEFAULT_FRAMES_PER_TASK, OPTIONS
+from .farm_job import DEFAULT_TASK_TIMEOUT, check_frames_per_task, parse_frames
+from .job_parameters import definition, setting_parameter
 from .job_template import EXTENSIONS, GPU_HOST_REQUIREMENTS, SPECIFICATION, frame_space, values_of
 from .worker_environment import cancelation
 
@@ -65,9 +67,7 @@ class BlenderJob:
     def check(self) -> "BlenderJob":
         parse_frames(self.frames)
         check_frames_per_task(self.frames_per_task)
-        if self.device not in DEVICES:
-            raise SettingError(f"{{device.name}} must be one of {', '.join(DEVICES)} "
-                               "(got '{device.value}')", device=self.device)
+        OPTIONS["device"].check(self.device)
         if not self.executable.strip():
             raise SettingError("{executable.name} must not be empty", executable=self.executable)
         return self
@@ -99,14 +99,10 @@ def parameters(job: BlenderJob) -> list[dict]:
          "(true), or with the file's own volume settings (false).", "default": _flag(job.auto_volumes),
          "value": _flag(job.auto_volumes), "allowedValues": ["true", "false"],
          **_ui(_SCENE, "Auto Volumes", control="CHECK_BOX")},
-        {"name": "FramesPerTask", "type": "INT", "description": "Frames each task renders in one "
-         "Blender process (Cycles keeps its session between them where that pays).",
-         "default": job.frames_per_task, "value": job.frames_per_task, "minValue": 1,
-         **_ui(_FARM, "Frames per task")},
-        {"name": "Device", "type": "STRING", "description": "Cycles device of every frame. The "
-         "step's host requirements were fixed with the bundle: write it again to change device.",
-         "default": job.device, "value": job.device, "allowedValues": list(DEVICES),
-         **_ui(_FARM, "Cycles device", control="DROPDOWN_LIST")},
+        setting_parameter("frames_per_task", job.frames_per_task, _FARM),
+        setting_parameter("device", job.device, _FARM,
+                          description=f"{OPTIONS['device'].help}. The step's host requirements were "
+                          "fixed with the bundle: write it again to change device."),
         {"name": "BlenderExecutable", **text, "description": "The Blender command on the farm's "
          "machines, with the xsl_render extension installed.", "default": job.executable,
          "value": job.executable, **_ui(_FARM, "Blender executable")},
@@ -119,7 +115,7 @@ def _flag(value: bool) -> str:
 
 def blender_job_template(job: BlenderJob) -> dict:
     """The job template as plain data (dump it as YAML or JSON)."""
-    definitions = [{key: value for key, value in p.items() if key != "value"} for p in parameters(job)]
+    definitions = [definition(p) for p in parameters(job)]
     step = {"name": "Render", "description": "Each task renders a chunk of frames with Blender, "
             "Auto Volumes choosing each shot's volume settings.", "parameterSpace": frame_space(),
             "script": {"actions": {"onRun": {

@@ -12,7 +12,8 @@ from pathlib import Path
 from ..errors import InputError, SettingError
 from ..frames import frame_expression
 from ..maps.options import MapOptions
-from ..sampling.guided_plan import MAX_TIME_BUDGET, GuidedOptions
+from ..option_table import DEFAULT_FRAMES_PER_TASK, MAX_TIME_BUDGET, OPTIONS
+from ..sampling.guided_plan import GuidedOptions
 from ..sampling.render_options import RenderOptions
 from ..sampling.render_request import MODE_TRAITS, SELECTIVE_MODES, ModeTraits, RenderRequest  # noqa: F401
 from .task_groups import check_groups
@@ -28,7 +29,6 @@ NO_CEILING = 0
 #: the budget must be more than 0 (nothing renders in a millisecond; the bound only keeps the
 #: form's check honest).
 MIN_FARM_TIME_BUDGET = 0.001
-DEVICES = ("CPU", "GPU")
 #: The task command when the bundle names none: whatever the worker's PATH finds.
 EXECUTABLE = "xsl-render"
 #: A selective task's timeout per frame of its chunk unless --task-timeout says otherwise: a
@@ -38,13 +38,6 @@ DEFAULT_TASK_TIMEOUT = 12 * 3600
 #: A guided frame's timeout is its budget plus this (Blender starting, the .blend loading,
 #: the volumes' octree, the files written) plus the budget again, in case the machine is slow.
 GUIDED_OVERHEAD = 900
-#: Frames one task renders in one Blender process (Open Job Description's task chunks): the
-#: scene is opened and Cycles syncs it once per chunk, not once per frame (3.5 s of
-#: heterogeneous fog's octree on balls_b, where a later frame of the session syncs in 0.05 s).
-DEFAULT_FRAMES_PER_TASK = 8
-#: More frames a task than this is a submission mistake: a task is what a farm retries,
-#: cancels and shows, and one of a thousand frames is already a long one.
-MAX_FRAMES_PER_TASK = 1000
 
 
 def parse_frames(text: str) -> str:
@@ -59,10 +52,7 @@ def guided_timeout(time_budget: float) -> int:
 
 def check_frames_per_task(count: int) -> int:
     """``count`` if it is a sensible number of frames per task, else InputError."""
-    if not 1 <= count <= MAX_FRAMES_PER_TASK:
-        raise SettingError(f"{{frames_per_task.name}} must be between 1 and {MAX_FRAMES_PER_TASK} "
-                           "(got {frames_per_task.value})", frames_per_task=count)
-    return count
+    return OPTIONS["frames_per_task"].check(count)
 
 
 @dataclass(frozen=True)
@@ -112,9 +102,7 @@ class FarmJob:
         check_groups(self.tasks_per_frame)
         check_frames_per_task(self.frames_per_task)
         parse_frames(self.frames)
-        if self.device not in DEVICES:
-            raise SettingError(f"{{device.name}} must be one of {', '.join(DEVICES)} "
-                               "(got '{device.value}')", device=self.device)
+        OPTIONS["device"].check(self.device)
         if self.task_timeout is not None and not 1 <= self.task_timeout <= MAX_TIME_BUDGET:
             raise SettingError(f"{{task_timeout.name}} must be between 1 and {MAX_TIME_BUDGET} "
                                "seconds (got {task_timeout.value})", task_timeout=self.task_timeout)

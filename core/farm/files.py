@@ -1,29 +1,13 @@
 """What a farm job writes for one frame, and how a rerun tells finished work from missing work.
 
-A farm task may die at any moment (a machine is reclaimed, a job is cancelled); the job is
-then simply run again. Each task therefore writes its results atomically and, *after* them,
-a small JSON record of what they were made from: a digest of every input that decides the
-pixels and the SHA-256 of the file written. A rerun trusts a result only when its record
-exists, names the same inputs and the file still has the recorded hash, so finished work is
-skipped, and half-written, stale (other scene or settings) or damaged files are redone.
-
-Layout under the job's output folder (``frame`` zero-padded to four digits, as Blender does)::
-
-    frame_0001.exr            the final image (RGBA)             (composite or guided step)
-    frame_0001_spp.exr/.png   samples per pixel
-    frame_0001.json           statistics + the frame's record (written as one set: frame_outputs)
-    work/frame_0001/maps/     xsl-render maps output              (maps step)
-    work/frame_0001/plan.json the tile plan + the record of the maps step
-    work/frame_0001/tiles/r<row0>-<row1>_c<col0>-<col1>.exr/.json   one per rectangle (tile steps)
-    .scene_inputs.json        the .blend's hash and the identity of every file it reads
-
-The digest of the inputs covers the scene's files, not the .blend alone: a library, texture
-or OpenVDB cache that changed makes the work redone (``addon.farm.tasks.scene_digest``).
-
-A rectangle's record depends on its window and samples, not on the map it came from, so a
-new plan (other map weights) re-renders only the rectangles that changed. A guided job has no
-work/ folder: one task renders the whole frame and writes its files directly.
-"""
+A task may die at any moment and is then run again, so each writes its results atomically
+and after them a record of what they were made from (a digest of every input that decides
+the pixels, the files the scene reads included, and the SHA-256 of the file written). A rerun
+trusts a result only when its record names the same inputs and the file keeps its hash.
+Under the job's output folder: ``frame_NNNN.exr``, ``_spp.exr/.png`` and ``.json`` (one set),
+``work/frame_NNNN/`` (maps, plan.json, one file per rectangle) and ``.scene_inputs.json``. A
+rectangle's record depends on its window and samples, not the map, so a new plan re-renders
+only the rectangles that changed; a guided job has no work/ folder."""
 from __future__ import annotations
 
 import hashlib

@@ -1,19 +1,11 @@
 """A job bundle on disk: the folder layout AWS Deadline Cloud submits and ``openjd`` runs.
 
-::
-
-    DIR/template.yaml            the Open Job Description job template
-    DIR/parameter_values.yaml    the values chosen at bundle time (``parameterValues`` list)
-    DIR/asset_references.yaml    the files the scene reads, attached to the job (core.farm.assets)
-    DIR/worker_requirements.txt  the pinned versions a worker installs (core.farm.worker_requirements)
-    DIR/xsl_render_bundle.json   our marker: what wrote the folder, and when
-    DIR/output/                  where the job writes (by default; the OutputDir parameter)
-
-The folder is ours to write when it does not exist, is empty, or holds our marker; any
-other folder is refused, so a typo in --bundle never overwrites someone's files. An
-existing bundle of ours is rewritten in place and its output folder kept: a rerun of the
-job then skips every task whose results are still current (``core.farm.files``).
-"""
+``template.yaml``, ``parameter_values.yaml``, ``asset_references.yaml`` (the files the scene
+reads), ``worker_requirements.txt`` (the pinned versions a worker installs), our marker
+``xsl_render_bundle.json`` and, by default, ``output/``. The folder is ours to write when it
+does not exist, is empty or holds our marker, so a typo in --bundle never overwrites someone's
+files; an existing bundle of ours is rewritten in place and its output kept, so a rerun of the
+job skips every task whose results are still current."""
 from __future__ import annotations
 
 import time

@@ -10,18 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import InputError
-from ..maps.director import OPERATORS
 from ..maps.options import MapOptions
-from ..sampling.guided_plan import IMPORTANCE_MAPS, MAX_TIME_BUDGET
-from ..sampling.render_options import MIN_TILE_SIZE, UNBOUNDED_SPP
-from .farm_job import (DEVICES, MAX_FRAMES_PER_TASK, MIN_FARM_TIME_BUDGET, NO_CEILING,
-                       SELECTIVE_MODES, FarmJob)
-from .task_groups import MAX_GROUPS
+from ..option_table import MAP_OPTIONS, OPTIONS
+from ..sampling.render_options import UNBOUNDED_SPP
+from .farm_job import MIN_FARM_TIME_BUDGET, NO_CEILING, SELECTIVE_MODES, FarmJob
 from .worker_environment import worker_parameters
-
-
-def _auto(value) -> str:
-    return "auto" if value is None else f"{value}"
 
 
 _SCENE = "Scene"
@@ -33,16 +26,6 @@ def _ui(group: str, label: str, **more) -> dict:
     return {"userInterface": {"label": label, "groupLabel": group, **more}}
 
 
-def _number(name, kind, value, flag, description, group, label, low=None, high=None):
-    entry = {"name": name, "type": kind, "description": description, "default": value,
-             "value": value, "flag": flag, **_ui(group, label)}
-    if low is not None:
-        entry["minValue"] = low
-    if high is not None:
-        entry["maxValue"] = high
-    return entry
-
-
 def _choice(name, value, allowed, flag, description, group, label):
     return {"name": name, "type": "STRING", "description": description, "default": value,
             "value": value, "allowedValues": list(allowed), "flag": flag,
@@ -52,6 +35,35 @@ def _choice(name, value, allowed, flag, description, group, label):
 def _text(name, value, flag, description, group, label):
     return {"name": name, "type": "STRING", "description": description, "default": value,
             "value": value, "minLength": 1, "flag": flag, **_ui(group, label)}
+
+
+def setting_parameter(name: str, value, group: str, **override) -> dict:
+    """The job parameter of option ``name`` (``core.option_table``) holding ``value``: its
+    name, type, range, label and description are the table's; ``override`` replaces what a
+    farm job says otherwise (a guided ceiling's 0 for none, a flag the template fills)."""
+    option = OPTIONS[name]
+    description = option.help + "."
+    control = {}
+    entry = {"name": option.farm, "flag": option.option}
+    if option.kind == "bool":
+        text = "true" if value else "false"
+        entry.update(type="STRING", default=text, value=text, allowedValues=["true", "false"],
+                     flag=f"{option.option}-value")
+        control = {"control": "CHECK_BOX"}
+    elif option.kind == "choice":
+        entry.update(type="STRING", default=value, value=value, allowedValues=list(option.values))
+        control = {"control": "DROPDOWN_LIST"}
+    elif option.none_word is not None:
+        text = option.none_word if value is None else f"{value}"
+        entry.update(type="STRING", default=text, value=text, minLength=1)
+        description += f" {option.none_word.capitalize()}: {option.none_means}."
+    else:
+        entry.update(type="INT" if option.kind == "int" else "FLOAT", default=value, value=value)
+        low = option.low if option.low is not None else option.above
+        entry.update({key: bound for key, bound in (("minValue", low), ("maxValue", option.high))
+                      if bound is not None})
+    entry.update({"description": description, **override})
+    return {**entry, **_ui(group, option.label, **control)}
 
 
 def _scene_parameters(job: FarmJob) -> list[dict]:
@@ -75,34 +87,20 @@ def _scene_parameters(job: FarmJob) -> list[dict]:
 
 
 def _map_parameters(m: MapOptions) -> list[dict]:
-    return [
-        _number("Wx", "FLOAT", m.wx, "--wx", "Weight of X in XS.", _MAPS, "w_x", low=0.0),
-        _number("Ws", "FLOAT", m.ws, "--ws", "Weight of S in XS.", _MAPS, "w_s", low=0.0),
-        _choice("XsOp", m.xs_op, OPERATORS, "--xs-op", "How X and S combine.", _MAPS, "XS operator"),
-        _number("Wxs", "FLOAT", m.wxs, "--wxs", "Weight of XS in XSL.", _MAPS, "w_xs", low=0.0),
-        _number("Wl", "FLOAT", m.wl, "--wl", "Weight of L in XSL.", _MAPS, "w_l", low=0.0),
-        _choice("XslOp", m.xsl_op, OPERATORS, "--xsl-op", "How XS and L combine.", _MAPS, "XSL operator"),
-        _text("LightN", _auto(m.light_n), "--light-n", "Iterations n of eq. 6, or auto.", _MAPS, "n"),
-        _text("LightSigmaBase", _auto(m.light_sigma_base), "--light-sigma-base",
-              "sigma_base of eq. 6 in pixels at 512 px, or auto.", _MAPS, "sigma_base"),
-        {**_choice("MinBound", "true" if m.minbound else "false", ("true", "false"), "--minbound-value",
-                   "Fill sky pixels with the smallest finite X.", _MAPS, "MinBound"),
-         "userInterface": {"label": "MinBound", "groupLabel": _MAPS, "control": "CHECK_BOX"}},
-    ]
+    return [setting_parameter(name, getattr(m, name), _MAPS) for name in MAP_OPTIONS]
 
 
 def _farm_parameters(job: FarmJob) -> list[dict]:
     """Frames per task, the device, the xsl-render command and how a worker gets it."""
     return [
-        _number("FramesPerTask", "INT", job.frames_per_task, None, "Frames each task renders in "
-                "one Blender process, Cycles syncing the scene once for all of them (Open Job "
-                "Description spreads the frames evenly over as many tasks as this needs). The "
-                "tasks' timeout was fixed with the bundle for its own value: write the bundle "
-                "again (--frames-per-task) to raise it far.", _FARM, "Frames per task", low=1,
-                high=MAX_FRAMES_PER_TASK),
-        _choice("Device", job.device, DEVICES, "--device", "Cycles device of every render. The "
-                "steps' host requirements (a GPU or not) were fixed with the bundle: write it "
-                "again to change device.", _FARM, "Cycles device"),
+        setting_parameter("frames_per_task", job.frames_per_task, _FARM, flag=None,
+                          description=f"{OPTIONS['frames_per_task'].help} (Open Job Description "
+                          "spreads the frames evenly over as many tasks as this needs). The tasks' "
+                          "timeout was fixed with the bundle for its own value: write the bundle "
+                          "again (--frames-per-task) to raise it far."),
+        setting_parameter("device", job.device, _FARM,
+                          description=f"{OPTIONS['device'].help}. The steps' host requirements (a "
+                          "GPU or not) were fixed with the bundle: write it again to change device."),
         _text("XslRender", job.executable, None, "The xsl-render command on the farm's machines "
               "(a name is looked up on the worker's PATH, after the worker setup's environment).",
               _FARM, "xsl-render executable"),
@@ -120,30 +118,15 @@ def _selective_parameters(job: FarmJob) -> list[dict]:
         *_scene_parameters(job),
         _choice("Mode", job.mode, SELECTIVE_MODES, "--mode", "Director map: xs (transmittance and "
                 "saliency) or xsl (also the glow of lights).", render, "Director map"),
-        _number("MaxSpp", "INT", o.max_spp, "--max-spp", "Samples per pixel where the map is 1 "
-                "(the gold standard's count).", render, "Max samples per pixel", low=1),
+        setting_parameter("max_spp", o.max_spp, render),
         _text("Resolution", f"{width}x{height}", "--resolution", "Render resolution WxH.", render,
               "Resolution"),
-        _number("Seed", "INT", o.seed, "--seed", "Cycles seed of every render.", render, "Seed", low=0),
+        setting_parameter("seed", o.seed, render),
         *_map_parameters(job.map_options),
-        _number("MinSpp", "INT", o.min_spp, "--min-spp", "Samples floor per pixel.", tiles,
-                "Min samples per pixel", low=1),
-        _number("TileSize", "INT", o.tile_size, "--tile-size", "Tile edge in pixels.", tiles,
-                "Tile size", low=MIN_TILE_SIZE),
-        _number("TileQuantile", "FLOAT", o.tile_quantile, "--tile-quantile", "Quantile of a tile's "
-                "per-pixel targets it renders with (1 = max).", tiles, "Tile quantile", low=0.0, high=1.0),
-        _number("SppLevels", "INT", o.spp_levels, "--spp-levels", "Round tile samples up to N "
-                "geometric levels (0 = off).", tiles, "Sample levels", low=0),
-        _number("Margin", "INT", o.margin, "--margin", "Pixels rendered around each rectangle and "
-                "cropped.", tiles, "Margin", low=0, high=64),
-        _number("RenderCost", "INT", o.render_cost, "--render-cost", "Fixed cost of one render in "
-                "pixel-samples.", tiles, "Render cost", low=0),
-        _text("AdaptiveThreshold", "off" if o.adaptive_threshold is None else f"{o.adaptive_threshold}",
-              "--adaptive-threshold", "Cycles adaptive sampling inside each rectangle (noise "
-              "threshold), or off.", tiles, "Adaptive threshold"),
-        _number("TasksPerFrame", "INT", job.tasks_per_frame, None, "Tile tasks per frame; the "
-                "rectangles are shared between them at about equal cost.", _FARM, "Tile tasks per frame",
-                low=1, high=MAX_GROUPS),
+        *[setting_parameter(name, getattr(o, name), tiles) for name in
+          ("min_spp", "tile_size", "tile_quantile", "spp_levels", "margin", "render_cost",
+           "adaptive_threshold")],
+        setting_parameter("tasks_per_frame", job.tasks_per_frame, _FARM, flag=None),
         *_farm_parameters(job),
     ]
 
@@ -156,27 +139,19 @@ def _guided_parameters(job: FarmJob) -> list[dict]:
     render = "Guided rendering"
     return [
         *_scene_parameters(job),
-        _number("TimeBudget", "FLOAT", g.time_budget, "--time-budget", "Seconds for the whole "
-                "render of each frame: importance map, scene sync, passes, denoising.", render,
-                "Time budget (s)", low=MIN_FARM_TIME_BUDGET, high=MAX_TIME_BUDGET),
-        _choice("Importance", g.importance, IMPORTANCE_MAPS, "--importance", "Director map that "
-                "weighs the estimated error: none, x, xs or xsl (computed inside the budget).",
-                render, "Importance map"),
-        _number("MaxSpp", "INT", o.max_spp if o.has_ceiling else NO_CEILING, "--max-spp", "Most samples any pixel "
-                f"may get; {NO_CEILING}: no ceiling.", render, "Max samples per pixel",
-                low=NO_CEILING, high=UNBOUNDED_SPP),
+        setting_parameter("time_budget", g.time_budget, render, minValue=MIN_FARM_TIME_BUDGET),
+        setting_parameter("importance", g.importance, render),
+        # An INT parameter cannot be empty: 0 stands for no ceiling, and a guided ceiling above
+        # UNBOUNDED_SPP means none anyway.
+        setting_parameter("max_spp", o.max_spp if o.has_ceiling else NO_CEILING, render,
+                          minValue=NO_CEILING, maxValue=UNBOUNDED_SPP,
+                          description=f"{OPTIONS['max_spp'].help}; {NO_CEILING}: no ceiling."),
         _text("Resolution", f"{width}x{height}", "--resolution", "Render resolution WxH.", render,
               "Resolution"),
-        _number("Seed", "INT", o.seed, "--seed", "Cycles seed of every render.", render, "Seed", low=0),
-        _number("PilotFraction", "FLOAT", g.pilot_fraction, "--pilot-fraction", "Share of the "
-                "budget the pilot pass may take, in (0, 1].", render, "Pilot fraction", high=1.0),
-        _number("GuidedExponent", "FLOAT", g.exponent, "--guided-exponent", "Samples go as (error "
-                "score x importance) to this power; 0 is uniform.", render, "Allocation exponent",
-                low=0.0, high=2.0),
-        _number("LevelRatio", "FLOAT", g.level_ratio, "--level-ratio", "Sample counts are rounded "
-                "to powers of this ratio, in (1, 4].", render, "Level ratio", high=4.0),
-        _number("TileSize", "INT", o.tile_size, "--tile-size", "Edge of the tiles the samples are "
-                "allocated on, in pixels.", render, "Tile size", low=MIN_TILE_SIZE),
+        setting_parameter("seed", o.seed, render),
+        *[setting_parameter(name, getattr(g, name), render) for name in
+          ("pilot_fraction", "exponent", "level_ratio")],
+        setting_parameter("tile_size", o.tile_size, render),
         *_map_parameters(job.map_options),
         *_farm_parameters(job),
     ]

@@ -1,58 +1,20 @@
 """An Open Job Description job template (specification 2023-09) for a selective or guided render.
 
-Every step's tasks take a *chunk* of frames (the TASK_CHUNKING extension: ``Frame`` is a
-``CHUNK[INT]`` task parameter, ``{{Task.Param.Frame}}`` a frame list such as ``1-8`` or
-``9,11,15-17``) and render them in one Blender process: the scene is opened once and Cycles
-syncs it once per chunk (heterogeneous fog's volume octree, 3.5 s on balls_b), not once per
-frame. The chunk size is the job parameter ``FramesPerTask``; the chunks are NONCONTIGUOUS (the
-next frames of the list whatever their gaps: a CONTIGUOUS chunk never spans a gap, so every
-chunk of ``1-250:2`` would hold one frame). A task keeps each frame as soon as it is done and
-skips the frames a rerun finds done.
-
-A selective job (``xs``, ``xsl``: the paper) has three steps, each a command of the
-``xsl-render`` executable:
-
-1. ``Maps`` — one task per chunk: the director maps of each frame and its tile plan
-   (``xsl-render farm-task maps``);
-2. ``Tiles`` — Frame chunk x Group tasks, ``Group`` = 1..TasksPerFrame: each task renders its
-   share of the rectangles of every frame of its chunk, in one Cycles session, split so that
-   the tasks of a frame cost about the same (``core.farm.task_groups``; the plan only exists
-   once the maps are computed, so the template fixes the number of tasks, not the
-   rectangles). A group's share of one frame is independent of its share of the next, so a
-   task renders them one frame after the other, and every tile task of a chunk pays the
-   scene sync once instead of once per frame. Depends on Maps;
-3. ``Composite`` — one task per chunk: the final EXR and samples-per-pixel image of each
-   frame. It renders nothing, but each task is a process that loads Blender (for its
-   denoiser) and a task for the farm to schedule. Depends on Maps and Tiles.
-
-A guided job (``xsl-render render --mode guided``) has one step, ``Render``: one task per
-chunk renders its frames one after another within the time budget per frame, sharing the
-chunk's time as ``render --frames`` does (``xsl-render farm-task guided``). A frame's passes
-follow the clock of one process, so a frame is not split between tasks; frames are.
-
-Every knob is a job parameter (a farm's submitter shows them as a form; the values chosen
-are recorded with the job): the scene file (a PATH, so the farm can map it between machines),
-the scene in it, the frames (an Open Job Description range expression such as ``1-250``,
-``1-99:2`` or ``1-3,8``; ``core.frames`` reads the same text) and how many a task renders,
-the output folder, the paper's map options, the tile options of ``xsl-render render`` and
-the number of tile tasks per frame (selective) or the time budget and the guided sampler's
-options (guided), the Cycles device, the ``xsl-render`` command (found on the worker's PATH
-unless the bundle names one) and how a worker gets it (``core.farm.worker_environment``, the
-job environment).
-
-Every action is cancelled NOTIFY_THEN_TERMINATE (xsl-render removes its temporaries on
-SIGTERM and exits 143; a kill follows after ``NOTIFY_PERIOD``) and has a timeout: a frame's
-allowance (derived from the time budget for a guided frame, ``DEFAULT_TASK_TIMEOUT``
-otherwise) times the bundle's frames per task, or ``task_timeout``. The steps that render
-with Cycles (Maps: its snapshot; Tiles; Render) ask for a GPU in ``hostRequirements`` when
-the job renders on one. The timeout and the requirement are fixed when the bundle is
-written, so FramesPerTask (far up) and Device should be changed by writing the bundle again.
-"""
+Every step's tasks take a chunk of frames (TASK_CHUNKING: ``Frame`` is a ``CHUNK[INT]``,
+NONCONTIGUOUS so that ``1-250:2`` still chunks) and render them in one Blender process, the
+scene synced once per chunk. A selective job has steps Maps (maps and tile plan per frame),
+Tiles (``TasksPerFrame`` tasks each rendering an equal-cost share of every frame's
+rectangles, ``core.farm.task_groups``) and Composite; a guided job one step, Render, a frame
+never split between tasks. Every knob is a job parameter (``core.farm.job_parameters``).
+Actions are cancelled NOTIFY_THEN_TERMINATE and time out after a frame's allowance times the
+frames per task; rendering steps ask for a GPU when the job renders on one (both fixed when
+the bundle is written)."""
 from __future__ import annotations
 
 from pathlib import Path
 
-from .farm_job import (DEFAULT_TASK_TIMEOUT, DEVICES, EXECUTABLE, MODES,  # noqa: F401
+from ..option_table import DEVICES  # noqa: F401
+from .farm_job import (DEFAULT_TASK_TIMEOUT, EXECUTABLE, MODES,  # noqa: F401
                        SELECTIVE_MODES, FarmJob, guided_timeout, parse_frames)
 from .job_parameters import checked_parameters, definition, task_arguments
 from .worker_environment import cancelation, job_environment

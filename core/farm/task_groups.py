@@ -1,30 +1,22 @@
 """Split a frame's tile plan between farm tasks so that every task costs about the same.
 
-A farm job cannot know the rectangles of a frame when it is submitted: they come from the
-director maps, which the job's first step computes. So the job has a fixed number K of tile
-tasks per frame, and each task takes its share of the plan with ``plan_group`` once the plan
-exists. Every task computes the same partition (it depends only on the plan and K), so no
-two tasks render the same rectangle and together they render all of them; a task whose
-group is empty (fewer rectangles than tasks) has nothing to do.
-
-The cost of a rectangle is the plan's own cost model (``core.sampling.tile_plan.split_tile``): its
-pixels times its samples, plus ``render_cost``, the fixed price of one Cycles render in
-pixel-samples. The partition is the longest-processing-time rule (Graham 1969): rectangles
-from the most to the least expensive, each to the group that has cost least so far. Its
-largest group is at most 4/3 of the best possible one, and much closer when the plan has
-many small rectangles, as selective plans do.
-"""
+The rectangles come from the director maps, which the job computes after it is submitted, so
+a job has a fixed number K of tile tasks per frame and each takes its share with
+``plan_group`` once the plan exists; every task computes the same partition, so together they
+render each rectangle once. A rectangle costs its pixels times its samples plus
+``render_cost`` (the plan's own model); the partition is the longest-processing-time rule
+(Graham 1969), whose largest group is at most 4/3 of the best possible."""
 from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass
 
 from ..errors import SettingError
+from ..option_table import MAX_GROUPS, OPTIONS  # noqa: F401 (the bound of check_groups)
 from ..sampling.tile_plan import Rect
 
 #: More tile tasks per frame than this is a submission mistake, not a plan (a 4K frame at
 #: the smallest tile has ~130k rectangles, but a farm job of a million tasks is no help).
-MAX_GROUPS = 10000
 
 
 def rect_cost(rect: Rect, render_cost: int) -> int:
@@ -34,10 +26,7 @@ def rect_cost(rect: Rect, render_cost: int) -> int:
 
 def check_groups(groups: int) -> int:
     """``groups`` if it is a sensible number of tile tasks per frame, else InputError."""
-    if not 1 <= groups <= MAX_GROUPS:
-        raise SettingError(f"{{tasks_per_frame.name}} must be between 1 and {MAX_GROUPS} "
-                           "(got {tasks_per_frame.value})", tasks_per_frame=groups)
-    return groups
+    return OPTIONS["tasks_per_frame"].check(groups)
 
 
 def partition(costs: list[int], groups: int) -> list[list[int]]:

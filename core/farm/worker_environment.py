@@ -1,22 +1,11 @@
 """The job environment that gives a farm worker ``xsl-render`` (Blender as ``bpy`` included).
 
-Open Job Description runs a job environment's ``onEnter`` once per session on a worker,
-before the session's first task, and its ``onExit`` after the last. Ours runs
-``core/farm/worker_setup.py`` (embedded in the template, run by the worker's Python) with
-the job's parameters:
-
-- ``WorkerSetup``: ``none`` (the worker's owner installed xsl-render: it must be on PATH,
-  checked before any task), ``pip`` (a virtual environment from ``WorkerPython``, which must
-  be Python 3.11) or ``conda`` (a conda environment with Python 3.11);
-- ``WorkerRequirements``: the pinned requirements file written into the bundle
-  (``core.farm.worker_requirements``), attached to the job as an input;
-- ``XslRenderPackage``: a pip requirement for this package reachable from the worker;
-- ``WorkerCache``: where environments are kept between sessions (``auto``: per user).
-
-The environment's folder goes first on PATH (``openjd_env``), so the tasks' command,
-``{{Param.XslRender}}`` (``xsl-render`` unless the bundle was written with --executable),
-is the installed one.
-"""
+Its ``onEnter`` runs once per session, before the first task, ``core/farm/worker_setup.py``
+(embedded in the template) with the job's parameters: ``WorkerSetup`` (none: installed and on
+PATH; pip or conda: an environment built with Python 3.11), ``WorkerRequirements`` (the pinned
+file written into the bundle), ``XslRenderPackage`` (a pip requirement for this package) and
+``WorkerCache`` (where environments are kept between sessions). The environment's folder goes
+first on PATH, so the tasks' ``{{Param.XslRender}}`` is the installed one."""
 from __future__ import annotations
 
 from dataclasses import dataclass

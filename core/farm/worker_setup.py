@@ -1,25 +1,12 @@
 """Prepare a farm worker to run ``xsl-render`` (the job environment's onEnter action).
 
-This file is embedded whole in the job template (``core.farm.worker_environment``) and run
-by the worker's own Python, so it uses the standard library only and imports nothing of
-the package: on a worker the package may not exist yet, which is why this script runs.
-
-``--setup none``  the worker was prepared by its owner: ``--executable`` must be found (on
-                  PATH, or as a path); a clear one-line failure otherwise, before any task.
-``--setup pip``   a virtual environment made with this Python (3.11: bpy's wheels are cp311)
-                  holding the pinned ``--requirements`` and ``--package`` (a pip requirement:
-                  a wheel file, a URL, ``git+https://...``, a name on the worker's index).
-``--setup conda`` the same in a conda environment with Python 3.11 (``conda`` or ``mamba``
-                  on PATH), bpy and the package from pip inside it (bpy is on PyPI only).
-
-The environment is kept in a cache folder named by a digest of what went into it, so the
-next session on the worker (or another worker sharing the folder) reuses it; it is built
-under a lock and marked complete last, and one without its mark (a cancelled install) is
-built again. A virtual environment cannot be moved once made, so it is built in place.
-The script tells the session with Open Job Description's stdout lines: ``openjd_env:
-PATH=...`` puts the environment first on PATH for every later action of the session,
-``openjd_status:`` and ``openjd_progress:`` say how far it is.
-"""
+Embedded whole in the job template and run by the worker's own Python: standard library only,
+nothing of the package (which may not be installed yet). ``--setup none`` checks that
+``--executable`` is found; ``pip`` builds a virtual environment (Python 3.11: bpy's wheels are
+cp311) with the pinned ``--requirements`` and ``--package``; ``conda`` the same in a conda
+environment. An environment is kept in a cache folder named by a digest of what went into it,
+built in place under a lock and marked complete last. It talks to the session with Open Job
+Description's ``openjd_env``, ``openjd_status`` and ``openjd_progress`` lines."""
 from __future__ import annotations
 
 import argparse
@@ -165,7 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     found = shutil.which(args.executable, path=path)
     if found is None:
         fail(f"'{args.executable}' is not on this worker's PATH ({path}); prepare the worker "
-             "(README: Render farm) or set WorkerSetup to pip or conda")
+             "(docs/farm.md) or set WorkerSetup to pip or conda")
     say("status", f"xsl-render is {found}")
     say("progress", 100)
     return 0

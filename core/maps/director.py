@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SettingError
+from ..option_table import OPERATORS
 
-OPERATORS = ("add", "multiply")
 
 
 def to_unit_range(values: np.ndarray) -> np.ndarray:

@@ -1,37 +1,13 @@
 """Which of Cycles' samples pass a volume face lying on a surface: Embree's arithmetic replayed.
 
-Where a mesh volume's face lies on a surface (a fog box resting on the floor), Cycles'
-renders let part of the samples through the surface (``core.maps.volume_stack``). What
-decides, checked sample by sample against renders (1-spp renders with each sample's ray
-direction in an AOV, the rays traced again through Blender's own Embree library from a
-C test program: 99 % of 36 000 samples pass or stop alike; this module's replay, whose
-reciprocal is not the hardware's, agrees on 86 %, and per pixel on the share):
-
-* Cycles traces with Embree's robust test (``triangle_intersector_pluecker.h``): in single
-  precision, vertices relative to the ray origin, edges, a normal from
-  ``stable_triangle_normal``, ``den = 2 dot(N, D)``, ``T = 2 dot(v0, N)`` with fused
-  multiply-adds, and ``t = rcp(den) * T``. Two coplanar triangles of different objects
-  give the same ``t`` for some rays and not for others: the roundings differ.
-* A camera ray starts on the near clip plane, ``P = eye + clip_start / cos * D``, rounded
-  per sample (``camera_sample_perspective``), so the roundings change from sample to
-  sample even inside the oracle's 0.01-pixel filter: per pixel, a fraction of the samples
-  meets both faces at the very same float.
-* Only those can pass: after leaving the volume the ray restarts at the next float after
-  the hit (``intersection_t_offset``) and skips a surface at the same distance. Whether
-  the volume's face or the surface is reported first on such an exact tie depends on
-  Embree's tree (with Cycles' filter function the last candidate tested wins): a fog box on
-  a one-quad floor lets every exact tie through, the same box on a 10x10 grid none.
-
-So the fraction of a pixel's samples that pass is ``w * f``: ``f`` the fraction of exact
-ties, which this module computes from the geometry, ``w`` the tie order, which only a
-render shows (``addon.maps.ties`` measures it with a few samples). One part of Embree's
-arithmetic is the hardware's: its reciprocal is ``rcpps`` (a table that differs between
-Intel and AMD) refined by a Newton step, taken here as the correctly rounded reciprocal
-refined by the same step. Against Embree itself on an AMD x86 (1.1 M rays) that makes
-``f`` about 3 % too high, which the measured ``w`` takes back, and leaves a texture from
-pixel to pixel of about 0.015 in ``f`` at 64x36, twice that at 384x216, where a pixel's
-samples see less of the table.
-"""
+Where a mesh volume's face lies on a surface (a fog box resting on the floor), a sample
+passes only where the two faces meet it at the very same float: Cycles restarts a ray leaving
+the volume at the next float after the hit and so skips a surface at the same distance. The
+roundings of Embree's robust triangle test (single precision, vertices relative to the ray's
+origin, the near-clip start rounded per sample) decide which samples tie: ``f``, computed
+here per pixel. Which face Embree reports first on an exact tie depends on its tree: ``w``,
+measured by a few probe renders (``addon.maps.ties``). The passing share is ``w * f``; how
+well the replay agrees with Embree: docs/design.md, "The X map's oracle"."""
 from __future__ import annotations
 
 import numpy as np

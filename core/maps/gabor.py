@@ -1,28 +1,11 @@
-"""Oriented Gabor filters for the orientation channel of Itti, Koch & Niebur (1998).
+"""Oriented Gabor filters for the orientation channel of Itti, Koch & Niebur (1998): local
+orientation ``O(σ, θ)`` at ``θ ∈ {0°, 45°, 90°, 135°}`` on every pyramid scale.
 
-Section 2.1 of the paper: local orientation ``O(σ, θ)`` comes from the intensity image
-with oriented Gabor filters (a cosine grating under a 2-D Gaussian envelope, the receptive
-field profile of orientation-selective cells in primary visual cortex) at
-``θ ∈ {0°, 45°, 90°, 135°}``, applied at every pyramid scale ``σ``.
-
-Choices the paper leaves open, made here and why:
-
-- *Quadrature pair.* The kernel is complex (cosine and sine phases) and the orientation map
-  is the magnitude of the response, the local oriented energy of a complex cell. A pure
-  cosine filter would respond to a bar but not to an edge at the same place, and its
-  response would ripple with the stimulus phase.
-- *Zero mean.* The cosine part of a sampled Gabor has a small DC response; it is removed so
-  that a uniform region gives no orientation energy whatever its brightness.
-- *Tuning.* Each pyramid level carries mainly the octave [1/8, 1/4] cycles/pixel (finer
-  detail is removed by the reduce filter, coarser detail is the next level's), so the
-  carrier sits at the centre of that octave, a wavelength of ``4 √2`` pixels, with a
-  one-octave half-amplitude bandwidth. All four kernels share one square support of
-  radius ``ceil(3 σ)``.
-- *Angle convention.* ``θ`` is the orientation of the bars and edges the filter prefers,
-  counter-clockwise from the horizontal as the image is seen on screen (row 0 at the top):
-  0° prefers horizontal bars, 45° bars running from lower left to upper right, 90°
-  vertical bars.
-"""
+What the paper leaves open, chosen here: a quadrature pair whose response magnitude is the
+local oriented energy (a cosine alone would miss an edge and ripple with phase); zero mean
+(a uniform region gives no orientation energy); a carrier of wavelength ``4 √2`` pixels with
+one-octave bandwidth, the centre of the octave each pyramid level carries; ``θ`` the
+orientation of the preferred bars, counter-clockwise from horizontal as seen on screen."""
 from __future__ import annotations
 
 import math

@@ -1,32 +1,19 @@
-"""The light map of section 4.4: a 0-LightMap spread by the multi-Gaussian filter of eq. 6.
+"""The light map of section 4.4: a 0-LightMap spread by the multi-Gaussian filter of eq. 6,
+``L_i = L_{i-1} + L_{i-1} * G(sigma_base * i)``, i = 1..n.
 
-Eq. 6:  L_0 = the 0-LightMap,  L_i = L_{i-1} + L_{i-1} * G(sigma_base * i),  i = 1..n.
-
-Because convolution is linear, L_n = L_0 * prod_i (delta + G(sigma_base i)). Expanding the
-product gives one Gaussian per subset S of {1..n}, with variance sigma_base^2 sum_{i in S} i^2
-(Gaussians compose by adding variances). ``eq6_components`` counts the subsets for each
-variance, and ``multi_gaussian`` applies the whole sum in one pass over a Gaussian scale
-space; ``multi_gaussian_direct`` is the literal iteration, kept as the reference.
-
-Sigmas are given in pixels at 512 pixels on the image's longer side and scaled with the
-resolution, so the map looks the same at every output size.
-
-Normalisation to [0, 1] (``light_map``): each light's glow (its part of L_n - L_0) peaks
-at the light's perceived brightness relative to the brightest light, and the light discs
-themselves clip at 1. The paper keeps the glow high by computing L_0 in HDR and reading
-the result in [0, 1]; dividing by the plain maximum instead would let a small bright
-lamp's own peak flatten its glow to nothing, and one bright lamp would flatten every other
-light's glow. Brightness is the cube root of the share of light that reaches the eye (CIE
-lightness, L* ~ Y^(1/3)): a lamp sending an eighth of the brightest's light still glows at
-one half, as the eye sees it; the paper's 0-LightMap drew every light plain white.
-"""
+Convolution is linear, so ``L_n`` is one Gaussian per subset of {1..n} (variances add):
+``multi_gaussian`` applies the whole sum in one pass over a scale space,
+``multi_gaussian_direct`` is the literal iteration, kept as the reference. Sigmas are in
+pixels at 512 px on the longer side. Each light's glow peaks at its perceived brightness
+relative to the brightest (the cube root of its share of light, CIE lightness), so one
+bright lamp does not flatten every other light's glow."""
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage
 
 from ..errors import SettingError
-from .options import MAX_N, MAX_SIGMA_BASE
+from ..option_table import MAX_N, MAX_SIGMA_BASE
 from .scale_space import gaussian_mixture_blur
 
 #: Sigmas are specified for this many pixels on the longer side (the paper's 512 px).

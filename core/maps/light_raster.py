@@ -1,25 +1,11 @@
 """The 0-LightMap of section 4.4: the visible light sources drawn on black, in HDR.
 
-Each light is drawn where the eye sees it, at its projected position and size:
-
-- point and spot lights as discs of their radius (spot lights only while the camera lies
-  inside the cone, weighted by the cone's smooth falloff, as Cycles attenuates them);
-- area lights as their projected shape (square, rectangle, disk, ellipse), from the front;
-- sun lights as a disc of their angular diameter when the sun direction is in view;
-- emissive meshes from an emission image of the frame (what Cycles' Emit pass holds),
-  which already has them at their visible size and clipped by whatever is in front.
-
-What is drawn is how much light reaches the eye from each source: its irradiance at the
-eye (intensity / distance^2 for lamps, the sun's irradiance, radiance x pixel solid angle
-for emissive surfaces) times the transmittance of the medium on the way (a lamp deep in
-thick fog glows less than a near one), spread over the pixels the source covers. So the
-map's integral over a light is that light's share, whatever its size on screen: a point
-lamp of radius 0 and a large lantern of the same power weigh the same. A pixel is drawn
-only where the Z buffer (first surface along the pixel's ray) lies behind the light, so a
-light behind a wall contributes nothing and a half-hidden one loses the hidden part (the
-paper's admitted weaknesses: occluded lights and the medium). Sub-pixel lights keep their
-integral (supersampled coverage).
-"""
+Each light is drawn where the eye sees it at its projected size (point and spot lights as
+discs, a spot only with the camera in its cone; area lights as their shape; the sun as a
+disc; emissive meshes from the frame's Emit pass), as the light that reaches the eye from it
+(irradiance at the eye times the medium's transmittance on the way) spread over its pixels,
+so a light's integral is its share whatever its size on screen. A pixel is drawn only where
+the first surface lies behind the light (the paper's admitted weakness: occluded lights)."""
 from __future__ import annotations
 
 import math

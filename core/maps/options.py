@@ -3,16 +3,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-import numpy as np
-
-from ..errors import SettingError
+from ..option_table import DEFAULTS, MAP_OPTIONS, OPTIONS
 from .director import check_combination
-
-#: Bounds of the light map's n and sigma_base (``light_map``): the paper uses up to 20 and 10;
-#: eq. 6 with n iterations has about n^3 / 3 Gaussians, and a sigma_base of 100 already
-#: spreads a glow over many frames.
-MAX_N = 100
-MAX_SIGMA_BASE = 100.0
 
 
 @dataclass(frozen=True)
@@ -24,27 +16,23 @@ class MapOptions:
     Sigmas are in pixels at 512 px on the longer side.
     """
 
-    wx: float = 0.5
-    ws: float = 0.5
-    xs_op: str = "add"
-    wxs: float = 0.5
-    wl: float = 0.5
-    xsl_op: str = "add"
-    light_n: int | None = None
-    light_sigma_base: float | None = None
-    minbound: bool = True
+    wx: float = DEFAULTS["wx"]
+    ws: float = DEFAULTS["ws"]
+    xs_op: str = DEFAULTS["xs_op"]
+    wxs: float = DEFAULTS["wxs"]
+    wl: float = DEFAULTS["wl"]
+    xsl_op: str = DEFAULTS["xsl_op"]
+    light_n: int | None = DEFAULTS["light_n"]
+    light_sigma_base: float | None = DEFAULTS["light_sigma_base"]
+    minbound: bool = DEFAULTS["minbound"]
 
     def validate(self) -> "MapOptions":
+        """Each value against its option (``core.option_table``), then the pairs of weights
+        (not both 0); SettingError naming the first bad one. Returns self."""
+        for name in MAP_OPTIONS:
+            OPTIONS[name].check(getattr(self, name))
         check_combination(self.wx, self.ws, self.xs_op, ("wx", "ws", "xs_op"))
         check_combination(self.wxs, self.wl, self.xsl_op, ("wxs", "wl", "xsl_op"))
-        n, sigma = self.light_n, self.light_sigma_base
-        if n is not None and (int(n) != n or not 0 <= n <= MAX_N):
-            raise SettingError(f"{{light_n.name}} must be a whole number from 0 to {MAX_N} or "
-                               "'auto', got {light_n.value}", light_n=n)
-        if sigma is not None and not (np.isfinite(sigma) and 0 < sigma <= MAX_SIGMA_BASE):
-            raise SettingError(f"{{light_sigma_base.name}} must be > 0 and at most "
-                               f"{MAX_SIGMA_BASE:g} or 'auto', got {{light_sigma_base.value}}",
-                               light_sigma_base=sigma)
         return self
 
     def to_dict(self) -> dict:

@@ -1,21 +1,10 @@
-"""Dyadic Gaussian pyramids and the across-scale operations of Itti, Koch & Niebur (1998).
+"""Dyadic Gaussian pyramids and the across-scale operations of Itti, Koch & Niebur (1998,
+section 2): nine scales from 1:1 to 1:256, the across-scale difference ``⊖`` (eqs. 1-4,
+:func:`center_surround`) and addition ``⊕`` (eqs. 5-7, :func:`reduce_to_level`).
 
-Itti, Koch and Niebur, "A Model of Saliency-Based Visual Attention for Rapid Scene
-Analysis", IEEE PAMI 20(11), 1998, section 2: nine spatial scales are made with dyadic
-Gaussian pyramids (Burt & Adelson 1983), which low-pass filter and subsample the input,
-giving reduction factors from 1:1 (scale 0) to 1:256 (scale 8). Two operations work across
-scales:
-
-- the across-scale *difference* ``⊖`` (equations 1-4) interpolates the coarser map to the
-  finer scale and subtracts point by point (:func:`center_surround`);
-- the across-scale *addition* ``⊕`` (equations 5-7) reduces every map to one common scale
-  and adds point by point (:func:`reduce_to_level`).
-
-A level keeps ``ceil(n / 2)`` pixels of the level above along each axis (scikit-image's
-convention), so odd sizes and images smaller than 256 pixels work: the coarse levels
-simply stop shrinking at one pixel. Pixel centres stay aligned across levels (pixel ``i`` of
-level ``k`` sits at ``2 i + 0.5`` of level ``k - 1``), so no half-pixel drift accumulates.
-"""
+A level keeps ``ceil(n / 2)`` pixels of the level above (scikit-image's convention), so odd
+sizes and small images work, and pixel centres stay aligned across levels (no half-pixel
+drift)."""
 from __future__ import annotations
 
 import math

@@ -1,33 +1,13 @@
 """Optical depth of a medium that varies in space, from an adaptive grid of node rays.
 
-Marching every pixel's ray through a noise texture costs tens of millions of texture
-evaluations. A medium's density is smooth across neighbouring pixels (its detail is large
-compared with the spacing of neighbouring rays), so only a sparse grid of *node* rays is
-marched. Along each, the cumulative optical depth
-
-    C(t) = integral from lo to t of kappa(origin + t direction) dt
-
-is tabulated at a fixed step from ``lo``, the nearest entry into the medium of the pixels
-around the node, to their farthest exit (``core.maps.depth_profiles``: fourth-order steps,
-cubic Hermite lookups in between). A pixel's optical depth is the sum over its own exact
-intervals [t0, t1] (from the ray cache) of C(t1) - C(t0), with C read at those distances
-along each of the four surrounding node rays and interpolated bilinearly across them.
-Where a medium starts and stops is therefore exact for every pixel; only the density
-between those boundaries is sampled coarsely. The extinction field must be defined all
-along the node rays, also outside the medium's mesh, which shader textures and voxel
-grids are (Cycles would evaluate them there too).
-
-The grid adapts to the field. It starts with nodes every ``FIRST_SPACING`` pixels. Each
-block of it is checked against the grid of half its spacing (whose extra nodes are
-marched for the check): if the transmittance of an interval that starts where the
-block's pixels enter the medium changes by more than ``tolerance``, the block is split
-in four and each quarter is checked the same way, down to one node per pixel, where
-every pixel's own ray is marched. A medium that is zero outside a known part (a volume
-object's voxels) may be smaller than the spacing: a block whose nodes all miss that part
-while some of its pixels see it is split as well. Accepted blocks keep the finer grid's
-values. The depth step is chosen once per medium on the first grid: halved until halving
-it again moves no transmittance by more than ``tolerance``.
-"""
+Marching every pixel's ray through a noise texture costs tens of millions of evaluations, but
+a medium's density is smooth across neighbouring pixels, so only a sparse grid of node rays is
+marched, each tabulating the cumulative optical depth C(t) (``core.maps.depth_profiles``). A
+pixel's depth is the sum over its own exact intervals of C(t1) - C(t0), read along the four
+surrounding node rays and interpolated: where a medium starts and stops stays exact per pixel.
+The grid starts every ``FIRST_SPACING`` pixels and a block is split in four wherever the grid
+of half its spacing moves a transmittance by more than ``tolerance``, down to one node per
+pixel; the depth step is halved until halving again changes nothing beyond ``tolerance``."""
 from __future__ import annotations
 
 from dataclasses import dataclass

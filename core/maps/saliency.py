@@ -1,32 +1,12 @@
-"""The saliency map of Itti, Koch & Niebur (1998), without bpy.
+"""The saliency map of Itti, Koch & Niebur (1998, IEEE PAMI 20(11)), without bpy; equation
+numbers are the paper's.
 
-Itti, Koch and Niebur, "A Model of Saliency-Based Visual Attention for Rapid Scene
-Analysis", IEEE PAMI 20(11):1254-1259, 1998. Equation numbers below are the paper's.
-
-From an RGB image (display-referred, [0, 1]):
-
-1. Intensity ``I = (r + g + b) / 3``. ``r, g, b`` are divided by ``I`` where ``I`` exceeds a
-   tenth of its maximum over the image and set to 0 elsewhere (hue is not perceivable at
-   very low luminance). Broadly tuned colour channels ``R = r - (g + b)/2``,
-   ``G = g - (r + b)/2``, ``B = b - (r + g)/2``, ``Y = (r + g)/2 - |r - g|/2 - b``,
-   negative values set to 0.
-2. Dyadic Gaussian pyramids, scales 0..8, of ``I``, ``R - G`` and ``B - Y``; Gabor
-   orientation energy ``O(σ, θ)`` on the intensity pyramid, ``θ ∈ {0, 45, 90, 135}°``.
-3. Centre-surround feature maps for ``c ∈ {2, 3, 4}``, ``s = c + δ``, ``δ ∈ {3, 4}``:
-   ``I(c,s) = |I(c) ⊖ I(s)|`` (1), ``RG(c,s) = |(R(c) - G(c)) ⊖ (G(s) - R(s))|`` (2),
-   ``BY(c,s) = |(B(c) - Y(c)) ⊖ (Y(s) - B(s))|`` (3), ``O(c,s,θ) = |O(c,θ) ⊖ O(s,θ)|``
-   (4): 6 + 12 + 24 = 42 maps.
-4. The normalisation operator ``N(.)`` (:func:`normalize_map`), across-scale addition at
-   scale 4 into the conspicuity maps ``Ī`` (5), ``C̄`` (6) and ``Ō`` (7), and
-   ``S = (N(Ī) + N(C̄) + N(Ō)) / 3`` (8).
-
-Equations 2 and 3 describe double-opponent cells: the centre is excited by one colour and
-inhibited by its opponent, the surround the other way round, so the cell answers
-``(R - G)`` at the centre *against* ``(R - G)`` in the surround. The map computed is
-``|RG(c) - RG(s)|`` with ``RG = R - G``, which is that contrast (and what Itti's own
-implementation computes); adding the two terms of equation 2 literally would make a large
-uniform red field as salient as a red spot.
-"""
+From a display-referred RGB image: intensity and broadly tuned colour channels (hue dropped
+below a tenth of the peak intensity); Gaussian pyramids of ``I``, ``R - G``, ``B - Y`` and Gabor
+orientation energy; 42 centre-surround feature maps (eqs. 1-4); the normalisation ``N(.)``,
+conspicuity maps by across-scale addition (5-7) and ``S`` their mean (8). The colour maps are
+``|RG(c) - RG(s)|``, the double-opponent contrast of eqs. 2-3 (and Itti's own code): adding the
+two terms literally would make a uniform red field as salient as a red spot."""
 from __future__ import annotations
 
 from dataclasses import dataclass

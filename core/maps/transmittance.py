@@ -1,18 +1,11 @@
 """Optical depth along camera rays: exp(-tau) is the fraction of light that reaches the eye.
 
-tau(ray) = integral of the extinction coefficient from the clip start to the first
-surface. Media add: the world volume fills every point of the ray (also inside object
-volumes, which is what Cycles renders: their extinctions sum), each object volume the
-intervals where the ray is inside it. A medium whose extinction is the same everywhere
-takes the closed form kappa * length. Over a window of camera rays, any other medium is
-integrated on an adaptive grid of node rays (``core.maps.ray_grid_depth``): exact interval
-boundaries per pixel, the density sampled between them only as finely as it needs.
-Rays that do not form such a grid (the few rays of the light map) are marched one by one
-with the midpoint rule: the long intervals of a medium (its 95th percentile of length)
-get ``samples`` points, shorter ones proportionally fewer (rounded up to a power of two,
-at least 4), so every interval is sampled at about the same step. Both are
-deterministic, so a recomputation is reproducible. Per RGB channel throughout.
-"""
+tau(ray) integrates the extinction from the clip start to the first surface; media add (the
+world's fills every point, each object volume its intervals, as Cycles sums them). A constant
+extinction takes the closed form kappa x length; over a window of camera rays any other
+medium is integrated on an adaptive grid of node rays (``core.maps.ray_grid_depth``); the few
+rays of the light map are marched one by one with the midpoint rule at about the same step
+for every interval. Deterministic and per RGB channel throughout."""
 from __future__ import annotations
 
 import time

@@ -1,38 +1,14 @@
-"""Which object volumes a camera ray is inside, decided the way Cycles decides it.
+"""Which object volumes a camera ray is inside, decided the way Cycles decides it: its volume
+stack (``scene/camera.cpp``, ``integrator/intersect_volume_stack.h``, ``volume_stack.h``),
+each rule checked against renders (``tests/test_xmap_coincident.py``).
 
-The X map must attenuate exactly where Cycles' renders do, and Cycles does not ask
-"is this point inside that mesh": it keeps a *volume stack* per path (intern/cycles,
-``scene/camera.cpp`` ``device_update_volume``, ``kernel/integrator/intersect_volume_stack.h``
-``integrator_volume_stack_init``, ``volume_stack.h``, ``shade_surface.h``). Its rules, each
-checked against renders (``tests/test_xmap_coincident.py``):
-
-* **Gate.** A camera counts as possibly inside an object volume only when the box around
-  its near plane (the corners and centre of the whole frame at the clip start, grown by
-  the clip start on every side) overlaps the bounding box of some object with a volume.
-  If none does, every camera ray starts outside every object volume, even one below an
-  open mesh with a volume material (the world volume is always in).
-* **Probe.** Otherwise each camera ray's start, its point on the near plane, sends a
-  probe straight up (+Z) through every face of every object with a volume, all hits
-  sorted by distance. Per object: a face seen from the front marks the object as entered
-  (whatever its material); a face seen from behind whose material has a volume puts the
-  object on the stack unless it was entered before; a face seen from behind without a
-  volume is passed over. A closed mesh with outward normals gives "inside the mesh"; an
-  open mesh, a mesh whose top is surface-only, flipped normals do not.
-* **Along the ray.** A face whose material has a volume, seen from the front, enters that
-  object's volume (once); seen from behind, leaves it. A face with a surface stops a
-  camera ray (the X map's first surface); one with only a volume is passed through.
-* **Ties.** After each pass-through the ray keeps its origin and only its start distance
-  moves to the next float after the hit, so a second face at *exactly* the same float
-  distance is skipped. Where a volume face coincides with a surface or with another
-  object's volume face (a fog box resting on the floor, a water surface on a water box,
-  two boxes sharing a face), whether a sample stops at the surface, leaves one medium or
-  enters the other depends on Embree's rounding and traversal order: per sample a coin
-  flip whose odds (0 to 1, banded across the frame) depend on single-precision roundings.
-  :func:`coincident_events` finds those rays. Where the only coincidence is the first
-  surface with a face where the ray leaves a volume (:func:`surface_exit_ties`, the fog box
-  on the floor), ``core.maps.embree_ties`` replays Embree's roundings for the odds; the
-  X map has Cycles measure the other ties.
-"""
+Gate: a camera counts as possibly inside a volume only when the box around its near plane
+overlaps some volume's bounding box. Probe: each ray's start then sends a probe straight up
+through every face of every object with a volume; a face seen from behind whose material has
+a volume puts the object on the stack unless it was entered first. Along the ray, volume
+faces enter and leave, surfaces stop it. Ties: a face at exactly the same float distance as
+the last hit is skipped, so coincident faces depend on Embree's rounding
+(:func:`coincident_events`; ``core.maps.embree_ties`` replays the fog-box-on-the-floor case)."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,18 +1,11 @@
 """The OpenVDB grids of a volume object as Cycles samples them, and where Cycles renders it.
 
-``addon.scene.volume_grids`` reads a grid's voxels (through geometry nodes: Python cannot read
-grids) into a dense block; this module samples it the way Cycles' volume attribute lookup
-does (``kernel_image_interp_3d`` on NanoVDB): world point -> object space -> index space,
-voxel values at integer index coordinates, trilinear between them (tricubic B-spline with
-the material's Cubic volume interpolation), the background value outside the block.
-
-Cycles renders a volume object as a mesh around its active voxels (``VolumeMeshBuilder``):
-voxels whose value is below the volume's clipping are dropped, the rest dilated by the
-padding the interpolation needs (1 voxel linear, 2 cubic), and the medium is the union of
-the 8^3-voxel leaf boxes [8a, 8a + 8] (index coordinates) that hold any of them. Outside
-those boxes the shader is not evaluated at all, so the extinction there is 0 whatever the
-material does with the grid.
-"""
+A grid's voxels (read through geometry nodes by ``addon.scene.volume_grids``) are sampled as
+Cycles' volume lookup does on NanoVDB: object to index space, trilinear (tricubic with Cubic
+interpolation), the background value outside. Cycles renders a volume object as the union of
+the 8^3-voxel leaf boxes holding active voxels (above the clipping, dilated by the
+interpolation's padding); outside them the shader is not evaluated, so the extinction is 0
+whatever the material does."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,20 +1,9 @@
 """The stimuli folder of a 2AFC experiment: one (gold standard, selective rendering) PNG pair
-per scene.
+per scene, flat: ``<scene>.gold.png`` and ``<scene>.test.png``.
 
-Layout, flat, one pair per scene::
-
-    STIMULI_DIR/
-        balls_a.gold.png     the gold standard (the ceiling of samples everywhere)
-        balls_a.test.png     the selective rendering of the same view (XS or XSL map)
-        road_xsl.gold.png
-        road_xsl.test.png
-        ...
-
-A scene name is letters, digits, ``_`` and ``-``. Both images of a pair must have the same
-size; they are shown at that size, pixel for pixel. Files that are not PNG (notes, the
-answers database) are ignored; a PNG with any other name is refused, so a typo cannot drop
-a scene silently.
-"""
+A scene name is letters, digits, ``_`` and ``-``; both images of a pair have the same size and
+are shown pixel for pixel. Files that are not PNG (notes, the answers database) are ignored;
+a PNG with any other name is refused, so a typo cannot drop a scene silently."""
 from __future__ import annotations
 
 import hashlib

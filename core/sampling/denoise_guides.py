@@ -1,19 +1,11 @@
 """Whether a frame's denoising guides are noisy enough to be denoised first.
 
 In fog Cycles writes the albedo and normal guides at the first scattering event, so where a
-camera ray may scatter before its surface the guides are as noisy as the image, and OIDN
-keeps that noise as detail. Denoised first (``addon.cycles.denoise``'s ``prefilter_guides``),
-they lowered mean FLIP at 16 spp by 7-27 % on the example scenes whose media fill much of the
-frame (balls_a, balls_b, statue) and by 2 % on road, whose world fog leaves most pixels'
-guides exact: there the prefilter's time (1.1 s at 512x288) bought nothing
-(``bench/bench_denoise_guides.py``, README "Denoising guides in fog").
-
-The measure: the median over the frame of each pixel's albedo (summed over RGB) distance
-from the median of its 3x3 neighbourhood. Edges and textures move few pixels; noise moves
-most. Measured at 4 / 16 / 32 spp: road 0.0000 at every count; balls_a 0.0054 / 0.0034 /
-0.0016, statue 0.039 / 0.023 / 0.012, balls_b 0.20 / 0.060 / 0.030. (It costs 0.04 s at
-512x288.)
-"""
+ray may scatter before its surface they are as noisy as the image and OIDN keeps that noise
+as detail; denoised first (``prefilter_guides``) they lower the error where the media fill the
+frame, and only cost time where the guides are exact (docs/performance.md, "Denoising guides
+in fog"). The measure: the median over the frame of each pixel's albedo distance from the
+median of its 3x3 neighbourhood; edges and textures move few pixels, noise most."""
 from __future__ import annotations
 
 import numpy as np

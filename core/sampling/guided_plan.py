@@ -1,45 +1,14 @@
 """Where a time-budgeted render spends its samples (``--mode guided``).
 
-The guided render (``addon/cycles/guided_render.py``) first renders the whole frame at a
-quarter of its resolution with a few samples (the pilot: about 1 % of the samples of the
-render), denoises it, and scores every tile by how much error it is likely to keep after
-denoising: the mean gradient of the denoised pilot's display luminance. Measured on the road
-scene against a converged reference (1024 spp), this score correlates with the per-tile
-error of a denoised 16-spp render as well as the difference of two denoised half-sample
-pilots does (log-log r = 0.91 for MSE, 0.73 for FLIP; 0.86 for MSE from a half-resolution
-pilot), for one cheap pilot instead of two, and the error of a denoised frame sits where the
-image has edges, highlights and glows.
-
-The budget then goes to the tiles in proportion to ``score ** exponent * importance **
-IMPORTANCE_EXPONENT``, every pixel rendered from its first sample in one Cycles session.
-The default exponent is 0: nothing is scored and, without an importance map, every pixel
-gets the same samples (the pilot then only times the render). Measured at equal time against
-the same estimator's uniform curve, the scored allocation (exponent 0.15) kept 0.6-0.8x of
-plain uniform sampling's speed on road and balls_a (``bench/bench_estimator.py --scored``,
-README): what it moves is worth less than the pilot, the scoring denoise and the pieces it
-costs. Three findings shape this:
-
-- FLIP after denoising falls only about as spp^-0.27 on these scenes, and its error is spread
-  evenly over the frame (the worst 20 % of 32-px tiles hold ~30 % of it), so moving samples
-  buys MSE far more than FLIP. Even an oracle allocation from the true per-tile error gains
-  only 1.10-1.14x in samples on FLIP (about 2.5x on MSE). The exponent is therefore gentle
-  (0.15 keeps FLIP level with uniform at equal samples and lowers MSE ~7 %); the paper's XSL
-  map scales samples linearly (exponent 1) and loses FLIP badly.
-- Blender 5 learns its volume scattering probability guiding per render session, so a pixel
-  whose samples are split over two sessions is noisier than one rendered in one (about 3 %
-  more FLIP per extra session at 16 spp, even when the second continues the first's sample
-  sequence), and merging two seeds of 8 costs ~5 % FLIP against one render of 16. A
-  full-resolution pilot continued by the final pass therefore loses what it was meant to
-  win; the low-resolution pilot is thrown away instead.
-
-- Cycles' sample patterns stratify best at powers of two, and after denoising it shows
-  (``sobol_friendly``): a whole frame just above a power of two is rendered at it.
-
-``importance`` is the director map (1 everywhere unless asked for). Counts are rounded to
-powers of ``level_ratio`` so that neighbouring tiles share them and merge into few renders.
-
-Everything here is plain numbers; the clock is read by the caller.
-"""
+The guided render's pilot (the whole frame at a quarter of its resolution, a few samples,
+denoised) scores every tile by the mean gradient of its display luminance, where a denoised
+frame keeps its error; the budget then goes to the tiles in proportion to ``score **
+exponent * importance ** IMPORTANCE_EXPONENT``, every pixel rendered from its first sample in
+one Cycles session. The default exponent is 0 (every pixel alike, the pilot only timing the
+render): after denoising, moving samples buys MSE far more than FLIP, and the scored
+allocation lost to plain uniform sampling at equal time (docs/paper.md, "What it measured";
+docs/performance.md, "Guided"). Counts are rounded to powers of ``level_ratio`` so neighbouring
+tiles merge into few renders. Plain numbers only; the caller reads the clock."""
 from __future__ import annotations
 
 import math
@@ -48,14 +17,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import SettingError
+from ..option_table import DEFAULTS, OPTIONS
 from .composite import Window
 from .render_options import UNBOUNDED_SPP  # noqa: F401 (where guided's callers found it)
 from .tile_plan import Rect, merge_rects, render_order, tile_windows
 
-#: The longest time budget accepted: a week (anything longer is a typo).
-MAX_TIME_BUDGET = 7 * 24 * 3600.0
-#: Director maps the allocation can weigh the error by.
-IMPORTANCE_MAPS = ("none", "x", "xs", "xsl")
 #: A tile's score never falls below this share of the frame's mean score, so that flat
 #: tiles, whose pilot gradient is noise-free zero, still get their share.
 SCORE_FLOOR = 0.05
@@ -94,31 +60,18 @@ class GuidedOptions:
     """
 
     time_budget: float
-    pilot_fraction: float = 0.05
-    exponent: float = 0.0
-    importance: str = "none"
-    level_ratio: float = 1.5
+    pilot_fraction: float = DEFAULTS["pilot_fraction"]
+    exponent: float = DEFAULTS["exponent"]
+    importance: str = DEFAULTS["importance"]
+    level_ratio: float = DEFAULTS["level_ratio"]
 
     def check(self) -> "GuidedOptions":
-        """Raise InputError naming the first impossible option; return self."""
-        if not (math.isfinite(self.time_budget) and self.time_budget > 0.0):
-            raise SettingError("{time_budget.name} must be a positive number of seconds "
-                               "(got {time_budget.value})", time_budget=self.time_budget)
-        if self.time_budget > MAX_TIME_BUDGET:
-            raise SettingError("{time_budget} is more than a week",
-                               time_budget=f"{self.time_budget:g} s")
-        if not (math.isfinite(self.pilot_fraction) and 0.0 < self.pilot_fraction <= 1.0):
-            raise SettingError("{pilot_fraction.name} must be in (0, 1] (got {pilot_fraction.value})",
-                               pilot_fraction=self.pilot_fraction)
-        if not (math.isfinite(self.exponent) and 0.0 <= self.exponent <= 2.0):
-            raise SettingError("{exponent.name} must be in [0, 2] (got {exponent.value})",
-                               exponent=self.exponent)
-        if self.importance not in IMPORTANCE_MAPS:
-            raise SettingError(f"{{importance.name}} must be one of {', '.join(IMPORTANCE_MAPS)} "
-                               "(got '{importance.value}')", importance=self.importance)
-        if not (math.isfinite(self.level_ratio) and 1.0 < self.level_ratio <= 4.0):
-            raise SettingError("{level_ratio.name} must be in (1, 4] (got {level_ratio.value})",
-                               level_ratio=self.level_ratio)
+        """Raise InputError naming the first impossible option (each against its option,
+        ``core.option_table``); return self."""
+        if self.time_budget is None:
+            raise SettingError("{time_budget.name} SECONDS is needed", time_budget=None)
+        for name in ("time_budget", "pilot_fraction", "exponent", "importance", "level_ratio"):
+            OPTIONS[name].check(getattr(self, name))
         return self
 
     def to_dict(self) -> dict:

@@ -9,16 +9,14 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from ..checks import MAX_SAMPLES, MAX_SEED, frame_size, parse_frame_size, whole_number
+from ..checks import frame_size, parse_frame_size
 from ..errors import Field, SettingError
+from ..option_table import DEFAULTS, OPTIONS
 from .volume_estimator import EstimatorChoice, check_estimator, fixed_choice
 
 #: The per-pixel ceiling of a guided render asked for none: far above any budget's reach on a
 #: CPU, and well inside what Cycles accepts (2^24 samples).
 UNBOUNDED_SPP = 1 << 16
-#: Smallest tile edge. Below this the fixed cost of a Cycles render (scene update, session
-#: reset, image write) outweighs the samples saved.
-MIN_TILE_SIZE = 8
 #: Blender 5's volume scattering probability guiding denoises its guide buffers with an
 #: 11-tap Gaussian (radius 5 px) in two passes; a margin of twice that radius makes a tile
 #: bit-identical to the same pixels of a full-frame render (see tests/test_selective_render.py).
@@ -76,46 +74,32 @@ class RenderOptions:
     """
 
     max_spp: int
-    min_spp: int = 1
-    tile_size: int = 32
-    tile_quantile: float = 1.0
-    spp_levels: int = 0
-    seed: int = 0
-    margin: int = 0
-    render_cost: int = 1024
-    adaptive_threshold: float | None = None
+    min_spp: int = DEFAULTS["min_spp"]
+    tile_size: int = DEFAULTS["tile_size"]
+    tile_quantile: float = DEFAULTS["tile_quantile"]
+    spp_levels: int = DEFAULTS["spp_levels"]
+    seed: int = DEFAULTS["seed"]
+    margin: int = DEFAULTS["margin"]
+    render_cost: int = DEFAULTS["render_cost"]
+    adaptive_threshold: float | None = DEFAULTS["adaptive_threshold"]
     resolution: tuple[int, int] | None = None
-    denoise: bool = True
+    denoise: bool = DEFAULTS["denoise"]
     estimator: str = "scene"
-    step_rate: float | None = None
+    step_rate: float | None = DEFAULTS["step_rate"]
     estimator_choice: EstimatorChoice | None = None
 
     def check(self) -> "RenderOptions":
-        """Raise InputError naming the first impossible option; return self."""
-        cycles = " (Cycles' limit)"
-        whole_number(self.max_spp, 1, MAX_SAMPLES, Field("max_spp"), cycles)
-        whole_number(self.min_spp, 1, MAX_SAMPLES, Field("min_spp"), cycles)
+        """Raise InputError naming the first impossible option; return self. Each value is
+        checked against its option (``core.option_table``), then what relates them."""
+        for name in ("max_spp", "min_spp", "tile_size", "tile_quantile", "spp_levels", "seed", "margin",
+                     "render_cost", "adaptive_threshold", "denoise"):
+            OPTIONS[name].check(getattr(self, name))
         if self.min_spp > self.max_spp:
             raise SettingError("{min_spp} is larger than {max_spp}",
                                min_spp=self.min_spp, max_spp=self.max_spp)
-        whole_number(self.tile_size, MIN_TILE_SIZE, 65_536, Field("tile_size"), " pixels")
-        if not 0.0 < self.tile_quantile <= 1.0:
-            raise SettingError("{tile_quantile.name} must be in (0, 1] (got {tile_quantile.value})",
-                               tile_quantile=self.tile_quantile)
-        if self.spp_levels == 1 or self.spp_levels < 0:
+        if self.spp_levels == 1:
             raise SettingError("{spp_levels.name} must be 0 (off) or at least 2 "
                                "(got {spp_levels.value})", spp_levels=self.spp_levels)
-        whole_number(self.seed, 0, MAX_SEED, Field("seed"), " (Cycles' limit)")
-        if not 0 <= self.margin <= 64:
-            raise SettingError("{margin.name} must be between 0 and 64 pixels (got {margin.value})",
-                               margin=self.margin)
-        if self.render_cost < 0:
-            raise SettingError("{render_cost.name} must not be negative (got {render_cost.value})",
-                               render_cost=self.render_cost)
-        if self.adaptive_threshold is not None and not self.adaptive_threshold > 0.0:
-            raise SettingError("{adaptive_threshold.name} must be positive "
-                               "(got {adaptive_threshold.value})",
-                               adaptive_threshold=self.adaptive_threshold)
         if self.resolution is not None:
             frame_size(*self.resolution, Field("resolution"))
         check_estimator(self.estimator, self.step_rate)

@@ -9,7 +9,7 @@ needs travels here, typed.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..errors import SettingError
 from ..maps.options import MapOptions
@@ -29,7 +29,7 @@ class ModeTraits:
         as a file, the maps it computes may be saved.
     time_budget
         Renders within a time budget of its own (guided: ``GuidedOptions``), with an optional
-        ceiling, ``auto``'s volume estimator by default and an importance map computed inside.
+        ceiling and an importance map computed inside.
     spp, seconds
         Takes a sample count (uniform), a wall time to render for (uniform, adaptive).
     budget_from
@@ -47,12 +47,6 @@ class ModeTraits:
     def computes_maps(self) -> bool:
         """Computes director maps in the run (xs, xsl unless given one; guided's importance)."""
         return self.director_map or self.time_budget
-
-    @property
-    def default_estimator(self) -> str:
-        """A time budget is spent best where the medium's estimate costs least (``auto``);
-        every other mode renders what the scene asks for."""
-        return "auto" if self.time_budget else "scene"
 
 
 #: Every render mode: the gold standard, the paper's selective modes, the baselines and the
@@ -102,6 +96,10 @@ class RenderRequest:
     label
         xs, xsl: the name the run's stats give its mode (the paper's validation names its
         variants: ``x_only``, ``xsl_no_minbound``, ...); None: the mode.
+    scene_samples
+        The counts the front end left out are the scene's own samples, known once it is open
+        (its ceiling, and uniform's count without a budget): ``at_scene_samples`` fills them
+        in. Until then the request is checked, never rendered.
     """
 
     mode: str
@@ -114,6 +112,7 @@ class RenderRequest:
     budget_from: str | None = None
     budget_mean_spp: float | None = None
     label: str | None = None
+    scene_samples: bool = False
 
     @property
     def traits(self) -> ModeTraits:
@@ -151,13 +150,26 @@ class RenderRequest:
             if not traits.seconds:
                 raise SettingError("{seconds.name} is for {mode.name} uniform and adaptive",
                                    seconds=self.seconds, mode=self.mode)
-        if traits.spp and (self.spp is None) == (self.seconds is None):
+        if traits.spp and (self.spp is None) == (self.seconds is None) and not (
+                self.scene_samples and self.spp is None):
             raise SettingError("{mode} needs either {spp.name} or {seconds.name}", mode=self.mode,
                                spp=self.spp, seconds=self.seconds)
         if self.noise_threshold is not None and not 0.0 < self.noise_threshold <= 1.0:
             raise SettingError("{noise_threshold.name} must be in (0, 1] (got {noise_threshold.value})",
                                noise_threshold=self.noise_threshold)
         return self
+
+    def at_scene_samples(self, samples: int) -> "RenderRequest":
+        """The request with the scene's ``samples`` where its counts were left to the scene:
+        the ceiling (at least uniform's count from a budget file), and uniform's count where no
+        budget gave one; checked. A request with its counts given is returned as it is."""
+        if not self.scene_samples:
+            return self
+        spp = self.spp
+        if self.traits.spp and spp is None and self.seconds is None:
+            spp = samples
+        options = replace(self.options, max_spp=max(samples, spp or 0))
+        return replace(self, options=options, spp=spp, scene_samples=False).check()
 
     def to_dict(self) -> dict:
         """Everything the request asks for, as plain data (a rerun compares its digest)."""

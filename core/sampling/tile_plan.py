@@ -1,22 +1,11 @@
 """From a director map to the rectangles Cycles renders, each with its own sample count.
 
-Section 5 of the paper: "the maximum number of rays per pixel is input as a user-defined
-parameter. For each pixel ... this number is weighted by the corresponding value in the XSL
-map." Per pixel that is ``target = max(min_spp, round(max_spp * map))``. Cycles renders one
-sample count per render, so:
-
-1. the frame is cut into square tiles (the last row and column may be narrower);
-2. a rectangle renders with a high quantile of its pixels' targets; the default quantile 1.0
-   (the maximum) means no pixel ever gets fewer samples than the map asks for;
-3. a tile is split into quadrants (recursively, down to 8 px) where the samples this saves
-   outweigh the fixed cost of the extra renders (``RenderOptions.render_cost``);
-4. optionally the counts are rounded *up* to a few geometric levels (fewer distinct counts);
-5. neighbouring rectangles with the same count are merged into larger ones (runs along rows,
-   then along columns, repeated), so fewer renders pay the fixed cost.
-
-A ``TilePlan`` is plain data: its JSON lists independent rectangles (pixel bounds, rows from
-the top, half-open; samples) that a farm can split between machines in any way.
-"""
+Section 5 of the paper weights a ceiling per pixel by the map: ``target = max(min_spp,
+round(max_spp * map))``. Cycles renders one count per render, so the frame is cut into square
+tiles, each rendered with a quantile of its pixels' targets (default the maximum: no pixel gets
+fewer than asked), split into quadrants down to 8 px where that saves more than the extra
+renders cost (``render_cost``), optionally rounded up to a few levels, and neighbours with the
+same count merged. A ``TilePlan`` is plain data a farm can split between machines."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -24,7 +13,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
-from .render_options import MIN_TILE_SIZE, RenderOptions
+from ..option_table import MIN_TILE_SIZE
+from .render_options import RenderOptions
 
 PLAN_FORMAT = 1
 

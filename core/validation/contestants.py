@@ -1,21 +1,11 @@
 """The contestants of ``xsl-render curves``: which renders make up each time-quality curve.
 
-A *curve* is one way of rendering at several budgets (uniform sampling at 1/16 .. 1x the
-ceiling, Cycles' adaptive sampling at three noise thresholds, ...). Each of its points is a
-:class:`Contestant`: a name (its files' stem), the *kind* of render that makes it (the
-Blender side, ``addon.validation.contestants.RENDERERS``, maps a kind to a render
-function) and its parameters. A contestant may take its time budget from another one's
-measured time (``time_of``): a time-budgeted mode runs at the times uniform sampling took.
-
-The registry is a list of :class:`CurveSpec`; adding a curve is one ``register_curve`` call
-here and one renderer on the Blender side. For a mode run at uniform's times::
-
-    register_curve(time_matched_curve("guided", "guided sampler"))     # here
-    RENDERERS["guided"] = render_guided_contestant                     # addon side
-
-Baseline curves (``baseline=True``: uniform and Cycles adaptive) are the ones every run's
-equal-quality speedup is read along (``core.validation.curves``).
-"""
+A curve is one way of rendering at several budgets (uniform at 1/16 .. 1x the ceiling, Cycles'
+adaptive at three thresholds, ...); each point is a :class:`Contestant`: a name, the kind of
+render that makes it (``addon.validation.contestants.REQUESTS``), its parameters, and maybe
+another contestant whose measured time is its budget (``time_of``). The registry is a list of
+:class:`CurveSpec`: a new curve is one ``register_curve`` call here and, for a new kind, one
+request maker on the Blender side. Baseline curves are the ones speedups are read along."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field

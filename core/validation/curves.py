@@ -1,35 +1,12 @@
 """Equal-quality speedup: how long a baseline needs to reach a run's error, read along the
 baseline's time-quality curve, divided by the run's own time.
 
-A *curve* is the (seconds, error) points of one way of rendering a frame (uniform sampling
-at several sample counts, Cycles' adaptive sampling at several noise thresholds, ...), every
-error measured against the same converged reference. A run is faster than a baseline at
-equal quality when the baseline needs more time than the run took to get an image as good.
-
-Monotone first
---------------
-Noise makes a measured curve wiggle: a run with more samples can score slightly worse than
-one with fewer. Before reading it we keep its *lower envelope* (its Pareto front): sorted by
-time, a point stays only when its error is below that of every faster point, so the curve
-says "the best error this baseline has been seen to reach within t seconds". This favours the
-baseline (a wiggle never makes it look slower than it was once measured to be), so a run is
-never called faster because of the baseline's noise.
-
-Reading the curve
------------------
-Errors after denoising fall about as a power of the samples (FLIP ~ spp^-0.25 on the road),
-a straight line in log-log, so ``log(seconds)`` is interpolated piecewise linearly in
-``log(error)`` between the envelope's points. An error outside the envelope's range is
-reached by extending the end segment's log-log slope; the result is then marked
-``extrapolated`` and shown as such, never silently.
-
-Direction
----------
-FLIP, MSE and the flicker of a frame sequence are errors (lower is better). ColorVideoVDP's
-JOD is a quality (higher is better; 10 means no visible difference): it is read as the error
-``10 - JOD``, the JOD drop, which is 0 for an image identical to the reference and grows with
-the difference.
-"""
+Noise makes a measured curve wiggle, so it is read along its lower envelope (sorted by time, a
+point stays only when its error is below every faster point's): the baseline is never made to
+look slower than it was once measured to be. Errors after denoising fall about as a power of
+the samples, so ``log(seconds)`` is interpolated piecewise linearly in ``log(error)``; an error
+outside the envelope is reached along the end segment's slope and marked ``extrapolated``.
+FLIP, MSE and flicker are errors; ColorVideoVDP's JOD is read as its drop below 10."""
 from __future__ import annotations
 
 import math

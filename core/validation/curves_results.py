@@ -1,36 +1,14 @@
-"""curves.json: every run of ``xsl-render curves``, its repeats, the curves they make and
-each run's equal-quality speedups, as the plot, the report and the command's table read it.
+"""curves.json: every run of ``xsl-render curves``, its repeats, the curves they make and each
+run's equal-quality speedups, as the plot, the report and the command's table read it.
 
-Schema (one file per scene and resolution)::
-
-    scene       {file, sha256, scene, frame, size: [w, h]}; over frames (``curves --frames``)
-                also frames: [numbers], frame_range: "1-24", fps (frame = the first frame)
-    ceiling     the contestants' ceiling (the gold standard's samples per pixel)
-    reference   {path, key, source: shipped|cache|rendered|given, inputs: {spp, seed, ...}};
-                over frames: key (of every frame's key), source, inputs {spp, seed} and
-                frames: [each frame's reference as for one frame]
-    repeats     N; seeds: the contestants' seeds (each contestant renders once per seed)
-    metrics     ["flip", "flip_tile95", "flip_share", "mse", "jod"]: HDR-FLIP mean, the 95th
-                percentile of 32-px regions' mean FLIP, % of pixels above FLIP 0.103, MSE of
-                the display-referred images, ColorVideoVDP JOD (None where it did not run;
-                vdp.skipped says why); over frames "flicker" too (SEQUENCE_METRICS)
-    curves      {name: {label, baseline, points: [run names, budget growing]}}
-    runs        {name: {curve, kind, label, params, time_of, gold, budget_s,
-                        repeats: [{seed, seconds, mean_spp, flip, mse, jod, file, reused, stats}],
-                        seconds, mean_spp, flip, mse, jod      (medians over the repeats),
-                        speedups: {baseline: {metric: {value, time_to_reach_s, extrapolated,
-                                                       faster, reason}}}}}
-
-Over frames a repeat is one run over every frame in one Cycles session: ``seconds`` the whole
-run, ``file`` its folder, flip, flip_tile95, flip_share and mse the means over its frames
-(``sequence_values``), ``flicker`` its sequence's (``core.validation.temporal``), ``jod``
-ColorVideoVDP's of the sequence as a video, ``relative_flicker``, and ``frames``: per frame
-{frame, file, seconds, mean_spp, flip, flip_tile95, flip_share, mse, flicker}.
-
-The median time and the median error of a run are taken separately. Speedups are read along
-each baseline curve's lower envelope (``core.validation.curves``); a run is not read along
-its own curve.
-"""
+Top level: ``scene`` (file, sha256, frame, size; over frames the frames and fps),
+``ceiling``, ``reference`` (path, key, source, inputs), ``repeats`` and ``seeds``, ``metrics``
+(flip, flip_tile95, flip_share, mse, jod; flicker over frames), ``curves`` ({name: label,
+baseline, points}) and ``runs`` ({name: the contestant, budget_s, every repeat, the medians of
+seconds, mean_spp and each metric, taken separately, and ``speedups`` {baseline: {metric:
+value, time_to_reach_s, extrapolated, faster, reason}}}). Over frames a repeat is one run of
+every frame in one Cycles session, its errors the means over them, with per-frame figures.
+A run is never read along its own curve."""
 from __future__ import annotations
 
 import statistics

@@ -1,25 +1,11 @@
-"""The frames of a test and a reference animation for ``xsl-render compare``: which files
-they are, matched by frame number, and checked from their headers before any pixel is read.
+"""The frames of a test and a reference animation for ``xsl-render compare``: which files they
+are, matched by frame number, and checked from their headers before any pixel is read.
 
-A sequence is named in one of two ways:
-
-- a *pattern*: a file name holding a run of ``#``, Blender's output naming
-  (:mod:`core.frames`): frame 7 of ``out/frame_####.exr`` is ``out/frame_0007.exr``
-  (:func:`~core.frames.frame_path`). Its frames are the files the pattern names for the
-  frames asked for (``--frames``) or, without ``--frames``, every file in the folder whose name
-  the pattern gives for some frame (so ``frame_0007.exr`` is frame 7 of ``frame_####.exr``,
-  ``frame_7.exr`` is not).
-- a *folder*: every ``.exr`` file in it whose name ends in a number, that number being the
-  frame (``shot_0007.exr``, ``0007.exr``). Other files are not frames: hidden ones (such as a
-  write's temporary), and those whose name ends otherwise, such as the samples map
-  ``frame_0007_spp.exr`` an animation's render writes beside each frame. Two files of one
-  frame are refused, since no one could say which is the frame.
-
-Frames are matched by number: the two sequences must hold the same frames (or every frame of
-``--frames``); a frame on one side only is named in the error. Every frame of both must have
-one size and one kind (HDR or LDR) and each pair one channel layout, so a comparison never
-stops half-way on a frame that could not be compared.
-"""
+A sequence is a pattern (a run of ``#`` is the frame number, Blender's naming: its frames are
+the files it names for the frames asked for, or every file of its folder it names) or a folder
+(every ``.exr`` whose name ends in a number; hidden files and ``_spp`` maps are not frames, two
+files of one frame are refused). Both sides must hold the same frames, of one size and kind
+and each pair one channel layout, so a comparison never stops half-way."""
 from __future__ import annotations
 
 import os

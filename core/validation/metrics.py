@@ -1,17 +1,10 @@
 """Difference metrics between a gold-standard render and a selective one (paper section 6.1).
 
-The paper compares images with MSE and Daly's VDP and reports, per metric, the *average
-pixel error* (the per-pixel difference map averaged over the image, in %) and the
-*percentage of error pixels* (pixels whose difference passes a threshold). This module
-computes both numbers, and the per-pixel map, for
-
-- MSE on display-referred images (:func:`mse_metric`),
-- NVIDIA's FLIP, today's evaluator for rendered images (:func:`flip_metric`),
-- ColorVideoVDP, the maintained successor of Daly's VDP (:mod:`.vdp`, optional).
-
-All metrics see the same observer (:data:`PIXELS_PER_DEGREE`) and, where they compare
-display values, the same display transform (:func:`standard_view`).
-"""
+As the paper reports them, per metric: the average pixel error (the per-pixel difference map
+averaged, in %) and the percentage of error pixels, with the map itself, for MSE on
+display-referred images, NVIDIA's FLIP and ColorVideoVDP (the maintained successor of Daly's
+VDP, optional: :mod:`.vdp`). All see the same observer (:data:`PIXELS_PER_DEGREE`) and, where
+they compare display values, the same display transform (:func:`standard_view`)."""
 from __future__ import annotations
 
 import math

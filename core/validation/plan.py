@@ -1,16 +1,11 @@
-"""What the objective validation renders per scene (paper sections 5 and 6.1), and the
-baselines the paper does not have.
+"""What a validation renders per scene (paper sections 5 and 6.1), and the runs the paper
+does not have: each compared with the converged reference and, as the paper does, with the
+gold standard (the ceiling in every pixel, the file's own settings).
 
-Per scene, every image is compared with the converged reference (``core.validation.reference``:
-far more samples, a seed no run uses) and, as the paper does, with the gold standard (the
-ceiling of samples in every pixel, the runs' own seed). The paper's versions are the X map
-alone, XS(1, 0, +), the saliency map alone, XS(0, 1, +), the XS map and, for the road scene,
-the XSL map with and without MinBound. Ours add uniform sampling at 1/8, 1/4 and 1/2 of the
-ceiling (with the gold standard, a uniform time-quality curve to read equal-quality speedups
-along) and three renders that cost the same wall time as the XSL run (maps included): uniform
-sampling and Cycles' own adaptive sampling, what a Blender user would do instead, and this
-project's own ``guided`` mode with ``--estimator auto`` (the volume estimator and pattern
-chosen per scene), what it offers instead of the paper's maps.
+The paper's versions: X only, S only, XS, XSL (road also without MinBound). Ours: uniform at
+1/8, 1/4 and 1/2 of the ceiling (with gold, the file's time-quality curve); uniform, Cycles'
+adaptive and ``guided`` in the XSL run's time; and Auto Volumes (``--estimator auto``) at the
+file's samples and in the file's time (gold's), the project's main job.
 """
 from __future__ import annotations
 
@@ -23,6 +18,9 @@ from ..maps.options import MapOptions
 GOLD = "gold"
 #: The run whose wall time (maps included) the equal-time baselines get.
 EQUAL_TIME_SOURCE = "xsl"
+#: How many times the ceiling Auto Volumes may render in the file's time: a time-limited render
+#: stops at Cycles' limit, and at the ceiling would stop early (auto renders it sooner).
+AUTO_CEILING_FACTOR = 4
 
 
 @dataclass(frozen=True)
@@ -33,11 +31,13 @@ class Variant:
     ----------
     name : file stem and key in results.json.
     label : what the report calls it (the paper's notation where it has one).
-    kind : "gold", "selective", "uniform", "adaptive" or "guided".
+    kind : "gold", "selective", "uniform", "adaptive", "guided" or "auto" (uniform with
+        ``--estimator auto``, the way Auto Volumes renders the file).
     director : for selective runs, "xs" or "xsl": which combination of the maps directs it.
     map_options : the weights and operators of that combination and whether X uses MinBound.
-    spp_fraction : for a uniform run with samples of its own, the fraction of the ceiling it
-        renders everywhere (None: a run at the XSL run's time).
+    spp_fraction : for a uniform or auto run with samples of its own, the fraction of the
+        ceiling it renders everywhere (None: a run at ``time_of``'s time).
+    time_of : the run whose render time an equal-time run gets (the XSL run unless named).
     """
 
     name: str
@@ -46,10 +46,16 @@ class Variant:
     director: str | None = None
     map_options: MapOptions | None = None
     spp_fraction: float | None = None
+    time_of: str | None = None
 
     @property
     def equal_time(self) -> bool:
         return self.kind in EQUAL_TIME_KINDS and self.spp_fraction is None
+
+    @property
+    def time_source(self) -> str | None:
+        """The run whose time an equal-time run gets (None for the others)."""
+        return (self.time_of or EQUAL_TIME_SOURCE) if self.equal_time else None
 
     def spp(self, ceiling: int) -> int:
         """Samples per pixel of a uniform run with ``spp_fraction`` (at least 1)."""
@@ -60,16 +66,20 @@ class Variant:
                 "map_options": self.map_options.to_dict() if self.map_options else None}
         if self.spp_fraction is not None:       # absent otherwise: older runs' hashes stay valid
             data["spp_fraction"] = self.spp_fraction
+        if self.time_of is not None:
+            data["time_of"] = self.time_of
         return data
 
 
-#: Kinds of run given the XSL run's wall time (uniform and adaptive without samples of their own).
-EQUAL_TIME_KINDS = ("uniform", "adaptive", "guided")
+#: Kinds of run given another run's wall time (without samples of their own).
+EQUAL_TIME_KINDS = ("uniform", "adaptive", "guided", "auto")
 
 _PAPER = MapOptions()
 VARIANTS = {
     v.name: v for v in (
         Variant(GOLD, "Gold standard", "gold"),
+        Variant("auto_file_samples", "Auto Volumes, the file's samples", "auto", spp_fraction=1.0),
+        Variant("auto_equal_time", "Auto Volumes, the file's time", "auto", time_of=GOLD),
         Variant("x_only", "X only: XS(1, 0, +)", "selective", "xs", MapOptions(wx=1.0, ws=0.0)),
         Variant("s_only", "S only: XS(0, 1, +)", "selective", "xs", MapOptions(wx=0.0, ws=1.0)),
         Variant("xs", "XS(0.5, 0.5, +)", "selective", "xs", _PAPER),
@@ -84,9 +94,13 @@ VARIANTS = {
         Variant("guided_equal_time", "Guided (auto), XSL's time", "guided"),
     )
 }
+#: The main job's comparison: the file as it renders (gold: its samples, its settings) and
+#: Auto Volumes in the same time.
+FILE_RUN, AUTO_RUN = GOLD, "auto_equal_time"
 #: Every variant but the MinBound comparison, which only some scenes get.
-DEFAULT_VARIANTS = ("gold", "x_only", "s_only", "xs", "xsl", "uniform_eighth", "uniform_quarter",
-                    "uniform_half", "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
+DEFAULT_VARIANTS = ("gold", "auto_file_samples", "auto_equal_time", "x_only", "s_only", "xs", "xsl",
+                    "uniform_eighth", "uniform_quarter", "uniform_half", "uniform_equal_time",
+                    "adaptive_equal_time", "guided_equal_time")
 #: The uniform runs with samples of their own: with gold, the uniform time-quality curve.
 UNIFORM_CURVE_VARIANTS = ("uniform_eighth", "uniform_quarter", "uniform_half")
 #: Scenes that also get XSL without MinBound (the paper's road scene, the one with sky).
@@ -100,8 +114,7 @@ def parse_variants(text: str | None) -> tuple[str, ...]:
         return DEFAULT_VARIANTS
     names = name_list(text, Field("variants"), VARIANTS, "variant")
     wanted = {GOLD, *names}
-    if any(VARIANTS[name].equal_time for name in names):
-        wanted.add(EQUAL_TIME_SOURCE)
+    wanted |= {VARIANTS[name].time_source for name in names} - {None}
     return tuple(name for name in VARIANTS if name in wanted)
 
 

@@ -1,23 +1,13 @@
-"""The converged reference every quality figure is measured against: its defaults, its cache
-key and where cached references are kept (the Blender side is ``addon.validation.reference``).
+"""The converged reference every quality figure is measured against: its defaults, its cache key
+and where cached references are kept (the Blender side is ``addon.validation.reference``).
 
-A reference is a uniform render with far more samples than any contestant, rendered with a
-seed no contestant uses and denoised exactly as every run is. Rendering one takes minutes
-(road at 512x288, 1024 spp: about five on two cores), so each is kept under the hash of
-everything that decides its pixels: the .blend file's bytes, the scene, the frame, the
-resolution, the samples, the seed, the Blender version and the version of the denoising
-procedure. The cache is looked up in this order:
-
-1. ``example_blends/references/`` of the source tree: entries shipped with the repository
-   (the road scene at the demo's settings), so that a fresh clone's demo needs no reference
-   render;
-2. the user cache: ``$XSL_RENDER_CACHE``, else ``$XDG_CACHE_HOME/xsl_render``, else
-   ``~/.cache/xsl_render``; references go in its ``references/`` folder.
-
-An entry is ``<key>.exr`` (float32 RGBA, the denoised reference) and ``<key>.json`` (its
-inputs, the key, the render's statistics), the JSON written last, both through temporary
-names, so an entry with a JSON is always whole.
-"""
+A reference is a uniform render with far more samples than any contestant, a seed no
+contestant uses, denoised as every run is. It takes minutes, so each is kept under the hash of
+what decides its pixels (the .blend's bytes, scene, frame, resolution, samples, seed, Blender
+and denoiser versions), looked up first in ``example_blends/references/`` (shipped: the demo's
+road) and then in the user cache (``$XSL_RENDER_CACHE``, else ``$XDG_CACHE_HOME/xsl_render``,
+else ``~/.cache/xsl_render``). An entry is ``<key>.exr`` and ``<key>.json``, the JSON written
+last, so an entry with a JSON is whole."""
 from __future__ import annotations
 
 import os

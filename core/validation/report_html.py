@@ -4,9 +4,10 @@ SVG, no script) built from results.json and the files beside it.
 First, every run of every scene against the converged reference with its equal-quality
 speedup over uniform sampling (``report_reference``); then the paper's measure, Tables I and
 II against the gold standard (which shares the runs' seed) in the paper's layout. Per scene:
-the director maps, the gold standard and the XSL render side by side with a magnified crop
-around the lights, the runs against the reference, the timing chart (Fig. 8), the paper's
-tables, and every variant with its sample counts and difference heatmaps.
+the file and Auto Volumes in the same time (the main job), the director maps, the gold
+standard and the XSL render with a magnified crop around the lights, the runs against the
+reference, the timing chart (Fig. 8), the paper's tables, and every variant with its sample
+counts and difference heatmaps.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from pathlib import Path
 from ..files import write_text
 from ..imageio import read_image
 from .metrics import FLIP_ERROR_THRESHOLD, MSE_ERROR_THRESHOLD
+from .plan import AUTO_RUN, FILE_RUN
 from .report_chart import Bar, timing_chart_svg
 from .report_images import crop, data_uri, display_image, light_crop_box, write_display_png
 from .report_reference import reference_tables, scene_reference_table
@@ -27,7 +29,8 @@ METRICS = (("mse", "MSE"), ("vdp", "VDP"), ("flip", "FLIP"))
 MAP_LABELS = (("x", "X: transmittance"), ("s", "S: saliency"), ("l", "L: lights"),
               ("xs", "XS"), ("xsl", "XSL"))
 #: The runs shown magnified around the lights, when the scene has them.
-CROP_RUNS = ("gold", "xsl", "xs", "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
+CROP_RUNS = ("gold", "auto_equal_time", "xsl", "xs", "uniform_equal_time", "adaptive_equal_time",
+             "guided_equal_time")
 #: The columns of the paper-layout tables: the selective runs the paper reports.
 PAPER_COLUMNS = (("xs", "XS"), ("xsl", "XSL"))
 SPEED_COLUMNS = PAPER_COLUMNS + (("uniform_equal_time", "uniform"), ("adaptive_equal_time", "adaptive"),
@@ -52,7 +55,9 @@ def build_report(results: dict, out_dir: Path) -> str:
             "uses. The equal-time baselines get the wall time of the XSL run, maps included, as "
             "Cycles' time limit (each then pays its own denoising pass, as XSL did); guided, where "
             "it ran, gets all of it as its budget, its denoising included, and chooses its volume "
-            "estimator and sample pattern per scene (auto); the other "
+            "estimator and sample pattern per scene (auto). Auto Volumes renders the file with "
+            "auto's choice at the file's samples and in the gold standard's time (the file as it "
+            "renders, its own settings), stopped by Cycles' time limit; the other "
             "uniform runs render 1/8, 1/4 and 1/2 of the ceiling. Wall times (and so speedups) "
             "depend on what else the machine was doing; sample ratios do not. "
             + ("Every frame, the gold standard's too, was denoised with Open Image Denoise "
@@ -62,7 +67,8 @@ def build_report(results: dict, out_dir: Path) -> str:
     vdp_line = ("VDP: ColorVideoVDP, probability of detection per pixel." if vdp.get("ran")
                 else f"VDP skipped: {escape(str(vdp.get('skipped')))}")
     body = [
-        "<h1>Perceptual rendering of participating media: validation</h1>", head,
+        "<h1>xsl_render: Auto Volumes, and the paper's perceptual rendering of participating "
+        "media</h1>", head,
         f"<p class=meta>{vdp_line}</p>",
         "<p class=note>Images are shown and compared through Blender's Standard view "
         "(exposure 0, clamp, sRGB). Error pixel: MSE squared error &gt; "
@@ -237,6 +243,7 @@ def _scene_section(scene_name: str, scene: dict, out_dir: Path) -> str:
         write_display_png(display_dir / f"{name}.png", display)
     if "gold" not in displays:
         return "".join(parts)
+    parts[2:2] = [_main_job(runs, display_dir)] if AUTO_RUN in displays else []
     box, where = light_crop_box(l_map, displays["gold"])
     overlay = _box_overlay(box, displays["gold"].shape)
     shown = "xsl" if "xsl" in displays else next((n for n in displays if n != "gold"), None)
@@ -284,6 +291,31 @@ def _scene_section(scene_name: str, scene: dict, out_dir: Path) -> str:
     if "vdp" not in heatmaps:
         parts.append("<p class=note>No VDP heatmaps: VDP did not run (see the top of the report).</p>")
     return "".join(parts)
+
+
+def _main_job(runs: dict, display_dir: Path) -> str:
+    """The file as it renders beside Auto Volumes in the same time, each with its time, samples
+    and error against the reference, and Auto Volumes' equal-quality speedup along the file's
+    curve; then Auto Volumes at the file's own samples, where it ran."""
+    def caption(name: str) -> str:
+        run = runs[name]
+        flip = ((run.get("reference_metrics") or {}).get("flip") or {}).get("mean_flip")
+        label = "The file as it renders (the gold standard)" if name == FILE_RUN else run["label"]
+        words = f"{label}: {run['time_s']:.2f} s, {run.get('mean_spp', 0):.0f} spp"
+        return words + (f", mean FLIP {flip:.4f}" if flip is not None else "")
+
+    speedup = ((runs[AUTO_RUN].get("equal_quality") or {}).get("flip") or {}).get("value")
+    faster = (f"Auto Volumes reaches its error {speedup:.2f}&times; sooner than the file does "
+              "(mean FLIP, read along the file's own time-quality curve)." if speedup else
+              "No equal-quality speedup could be read (the file's curve needs two points).")
+    same = runs.get("auto_file_samples")
+    if same is not None:
+        faster += (f" At the file's own samples it took {same['time_s']:.2f} s against "
+                   f"{runs[FILE_RUN]['time_s']:.2f} s.")
+    return ("<h3>The file and Auto Volumes in the same time</h3><div class='grid pair'>"
+            + _img(display_dir / f"{FILE_RUN}.png", caption(FILE_RUN))
+            + _img(display_dir / f"{AUTO_RUN}.png", caption(AUTO_RUN))
+            + f"</div><p class=note>{faster}</p>")
 
 
 def _heatmap_cell(run: dict, metric: str, out_dir: Path, reference: bool) -> str:

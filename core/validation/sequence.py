@@ -1,20 +1,9 @@
 """A test animation against its reference: every frame compared as ``compare`` compares one
-image, and the sequence as a whole: the means and the worst frame of the per-frame figures,
-its flicker (:mod:`.temporal`) and ColorVideoVDP's JOD of the sequence played as a video.
-
-Per frame the figures are those of the single-image comparison and of ``curves``, from the
-same functions (:func:`~.metrics.compare_images`, :func:`~.curves_results.metric_values`):
-
-- ``flip``: mean HDR-FLIP (LDR-FLIP for display-encoded frames),
-- ``flip_tile95``: the 95th percentile of the mean FLIP of 32-px tiles (no region visibly worse),
-- ``flip_share``: % of pixels with FLIP above 0.103 (the paper's Table II),
-- ``mse``: MSE of the display-referred frames;
-
-and ``flicker``, the error of the change into the frame from the one before
-(:class:`~.temporal.TemporalError`). Frames are read one pair at a time, so a long sequence
-needs the memory of one frame pair, plus, for the video JOD only, every display-encoded
-frame at half precision.
-"""
+image (mean FLIP, the 95th percentile of 32-px tile FLIP, the share of pixels over 0.103,
+MSE), and the sequence as a whole: the means and worst frame of those, its flicker
+(:mod:`.temporal`) and ColorVideoVDP's JOD of the sequence played as a video. Frames are read
+one pair at a time, so a long sequence needs one frame pair's memory (plus, for the video JOD
+only, every display-encoded frame at half precision)."""
 from __future__ import annotations
 
 import os

@@ -1,21 +1,10 @@
 """The validation's files on disk, so that a run killed midway continues where it stopped.
 
-Layout of the output folder::
-
-    DIR/results.json                    every number of every scene (rewritten as runs finish)
-    DIR/report.html                     the report (core.validation.report_html)
-    DIR/<scene>/maps/                   xsl-render maps output + inputs.json (its input hash)
-    DIR/<scene>/maps_no_minbound/       the same without MinBound (scenes that compare it)
-    DIR/<scene>/<variant>.exr           the render, RGBA scene-linear
-    DIR/<scene>/<variant>_spp.exr/.png  samples per pixel (the PNG's grey is spp / max_spp)
-    DIR/<scene>/<variant>.json          the run's record: inputs, their hash, stats, metrics
-    DIR/<scene>/heatmaps/<variant>_<metric>.png
-
-A record is written last, after the images it describes, and every file goes through a
-temporary name (``core.files``), so a record on disk always means finished images. A
-finished step is reused when the hash of its inputs (the scene file's own hash, the mode,
-the options, the hash of what it was compared with) equals the hash stored with it.
-"""
+``DIR/results.json`` (every number, rewritten as runs finish), ``DIR/report.html``, and per
+scene its maps (``maps/``, ``maps_no_minbound/``), each run's ``<variant>.exr``,
+``_spp.exr/.png`` and ``<variant>.json`` record (inputs, their hash, stats, metrics) and its
+heatmaps. A record is written last, after the images it describes, every file through a
+temporary name; a finished step is reused while the hash of its inputs is the one stored."""
 from __future__ import annotations
 
 import json

@@ -1,25 +1,12 @@
 """The VDP metric of the paper (section 6.1), with ColorVideoVDP as today's VDP.
 
-Sundstedt et al. used Daly's VDP: per pixel, the probability P that a viewer detects a
-difference, with P > 0.75 counting as an error pixel. ColorVideoVDP (PyPI ``cvvdp``,
-Mantiuk et al. 2024) is the maintained successor of that family of metrics. It is an
-*optional* extra because it needs PyTorch (from PyPI on Linux that brings the CUDA
-libraries, gigabytes); when it is missing the result says so and why, never a zero.
-
-From JOD to a probability of detection
---------------------------------------
-ColorVideoVDP scores in JOD (just-objectionable differences): 10 is no difference, and a
-difference of 1 JOD means 75% of observers pick the better image in a two-alternative
-forced choice. Its ``raw`` heatmap holds, per pixel, ``(10 - JOD)/10``, so the per-pixel
-JOD drop is ``d = 10 * heatmap``. On the JOD (Thurstone) scale a drop of ``d`` is chosen
-with probability ``Phi(z75 * d)``, ``z75 = Phi^-1(0.75)``. Removing lucky guesses (a
-viewer who sees no difference still picks right half the time) gives the probability of
-detection the paper thresholds::
-
-    P = 2 * Phi(z75 * d) - 1        (0 for identical pixels, 0.5 at 1 JOD)
-
-so an error pixel, P > 0.75, is a pixel whose predicted drop exceeds about 1.71 JOD.
-"""
+The paper used Daly's VDP: per pixel the probability P that a viewer detects a difference,
+P > 0.75 an error pixel. ColorVideoVDP (``cvvdp``, Mantiuk et al. 2024) is its maintained
+successor, optional because it needs PyTorch; when missing the result says so and why. Its
+``raw`` heatmap holds ``(10 - JOD) / 10`` per pixel, so the JOD drop is ``d = 10 x heatmap``;
+on the Thurstone scale a drop ``d`` is chosen with probability ``Phi(z75 d)``, and removing
+lucky guesses gives ``P = 2 Phi(z75 d) - 1``: an error pixel is a predicted drop above about
+1.71 JOD."""
 from __future__ import annotations
 
 import functools

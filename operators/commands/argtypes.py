@@ -1,23 +1,13 @@
-"""The kinds of value a command-line option takes, each checked while the command line is
-parsed: before Blender loads, before any work, before anything is written.
+"""The kinds of value a command-line option takes, each checked while the command line is parsed:
+before Blender loads, before any work, before anything is written.
 
-An option says what it accepts with ``type=``::
-
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, ...)
-    parser.add_argument("--time-budget", type=argtypes.number(above=0), ...)
-    parser.add_argument("--out", type=argtypes.output_file(".exr"), ...)
-    parser.add_argument("scene", type=argtypes.SCENE, ...)
-
-A bad value ends the command with exit code 2 and one line, ``xsl-render render: argument
---max-spp: must be a whole number from 1 to 16777216 (Cycles' limit), not 0``. Paths come
-back as the text given (commands wrap them in ``Path`` as they like); numbers as int or
-float. What relates several options (``--min-spp`` above ``--max-spp``, ``--out`` and
-``--stats`` naming one file) is the command's ``check(args)`` (``operators/cli.py``).
-
-Plain ``type=int`` and ``type=float`` are safe too: the command line's parser maps them to
-:func:`int32` and :func:`finite`, so no option takes NaN, infinity or a number Blender's
-32-bit properties cannot hold.
-"""
+An option says what it accepts with ``type=`` (``SAMPLES``, ``number(above=0, hi=1)``,
+``output_file(".exr")``, ``SCENE``...); a setting of ``core.option_table`` gets its type from
+the table (``option_flags.add_option``). A bad value ends the command with exit code 2 and one
+line (``argument --spp: must be a whole number from 1 to 16777216 (Cycles' limit), not 0``);
+what relates several options is the command's ``check(args)``. Plain ``type=int`` and
+``type=float`` are mapped to :func:`int32` and :func:`finite`, so no option takes NaN, infinity
+or a number Blender's 32-bit properties cannot hold."""
 from __future__ import annotations
 
 import argparse
@@ -40,6 +30,11 @@ def _converter(function, label: str, keep_text: bool = False, role: str | None =
     convert.__name__ = label                # argparse names the type in some messages
     convert.role = role
     return convert
+
+
+def checked_by(function, label: str):
+    """An argparse type that is ``function(text)`` (a check of ``core.option_table``)."""
+    return _converter(function, label)
 
 
 def integer(lo: int = checks.INT32_MIN, hi: int = checks.INT32_MAX, limit: str = ""):

@@ -1,17 +1,11 @@
-"""``xsl-render compare REF TEST``: MSE, FLIP and VDP between a reference and a test image,
-or between two frame sequences.
+"""``xsl-render compare REF TEST``: MSE, FLIP and VDP between a reference and a test image, or
+between two frame sequences.
 
-Prints one line per metric: the paper's average pixel error (%) and percentage of error
-pixels, the threshold that makes a pixel an error, and the metric's own score (MSE, mean
-FLIP, ColorVideoVDP's JOD). ``--json`` writes every number, ``--heatmap`` the FLIP map as a
-magma PNG, ``--heatmap-dir`` the maps of all metrics (mse.png, flip.png, vdp.png).
-
-REF and TEST may both be sequences instead (``out/frame_####.exr`` or a folder of EXR frames,
-``core/validation/frame_sequence.py``): every frame is compared, then the sequence as a whole
-(``core/validation/sequence.py``); a line per frame, the means, the worst frame, the flicker
-and the video JOD are printed, ``--heatmap-dir`` holds every frame's maps and ``--report`` an
-HTML page with the per-frame curves and a strip of frames.
-"""
+One line per metric: the paper's average pixel error (%), its percentage of error pixels and
+their threshold, and the metric's own score; ``--json`` writes every number, ``--heatmap`` the
+FLIP map, ``--heatmap-dir`` every metric's. Two sequences (``out/frame_####.exr`` or a folder of
+frames, ``core/validation/frame_sequence.py``) are compared frame by frame and as a whole
+(means, worst frame, flicker, video JOD); ``--report`` writes an HTML page of them."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,17 +1,11 @@
 """``xsl-render curves SCENE.blend --out DIR``: time-quality curves and equal-quality speedups.
 
-Renders uniform sampling at 1/16 .. 1x the ceiling (the point at the ceiling is the gold
-standard), Cycles' adaptive sampling at three noise thresholds, Cycles' path guiding, XS and
-XSL at four ceilings, all at one resolution, denoised alike, each timed as a whole and
-compared with the converged reference (``xsl-render reference``, cached). Writes
-DIR/curves.json, DIR/curves.png and DIR/report.html and prints the table. Resumable:
-finished runs in DIR are reused.
-
-``--frames 1-24``: every run renders all those frames in one Cycles session, as ``render
---frames`` does (its time the whole run's, one scene sync), each frame compared with that
-frame's reference; a run's errors are the means over its frames, beside its sequence's
-flicker (``addon.validation.curves_runner``).
-"""
+Uniform at 1/16 .. 1x the ceiling (the last is the gold standard), Cycles' adaptive at three
+thresholds, path guiding, XS and XSL at four ceilings, at one resolution, denoised alike,
+each timed whole and compared with the converged reference; DIR/curves.json, curves.png and
+report.html, and the table printed. Finished runs in DIR are reused. With ``--frames`` every
+run renders the frames in one Cycles session, each frame against its own reference
+(``addon.validation.curves_runner``)."""
 from __future__ import annotations
 
 import argparse
@@ -31,6 +25,7 @@ def add_arguments(parser) -> None:
     from ...core.validation.contestants import curve_names
     from . import argtypes
     from .common import add_scene_arguments
+    from .option_flags import add_option
     from .reference import ceiling
 
     add_scene_arguments(parser)
@@ -54,8 +49,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--curves", metavar="LIST",
                         help=f"curves to render (default all: {', '.join(curve_names())}); "
                              "uniform is always in")
-    parser.add_argument("--seed", type=argtypes.SEED, default=0,
-                        help="first contestant seed (default 0; never the reference's)")
+    add_option(parser, "seed", help="first contestant seed (never the reference's)")
     parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
                         help="ColorVideoVDP's JOD where it is installed (default on)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -1,20 +1,12 @@
-"""``xsl-render demo``: the main job on the bundled road scene (the paper's Fig. 7 and its
-second experiment): director maps, the XSL and XS renders, the gold standard, uniform at 1/8,
-1/4 and 1/2 of the ceiling (with gold, the uniform time-quality curve), uniform and Cycles
-adaptive sampling at XSL's wall time, and this project's own ``guided`` mode (auto's volume
-estimator, the default of ``render --mode guided``) in the same time; MSE / FLIP / VDP against the converged reference (the
-road's is shipped with the repository, example_blends/references/) with each run's
-equal-quality speedup over uniform, and the paper's Tables I-II against the gold standard;
-the HTML report, whose path is printed last.
+"""``xsl-render demo``: the main job on the bundled road scene. The file as it renders (the
+gold standard: its 64 samples, its settings) against Auto Volumes in the same time and at the
+same samples; the paper's director maps, its XS and XSL renders, uniform at 1/8-1/2 of the
+ceiling (the file's time-quality curve) and the equal-time baselines; each against the
+converged reference (shipped in example_blends/references/) with its equal-quality speedup,
+and the paper's Tables I-II against gold, in one HTML report whose path is printed last.
 
-Default: the scene's own 512x288 at the example scenes' ceiling of 64 samples per pixel,
-about three minutes on two CPU cores. Why not the paper's 16: at 16 spp the gold
-standard renders in about 4 s here, and the fixed costs of the selective render (the maps'
-snapshot, the denoiser, one Cycles render per rectangle) eat what the saved samples gain,
-which says more about a fast Cycles than about the method. ``--full`` renders every version
-of the paper (X only, S only, XS, XSL with and without MinBound) and the equal-time
-baselines at both ceilings, 16 and 64. Finished work in --out is reused, so a rerun (or a
-run after Ctrl-C) only does what is missing.
+``--full`` renders every version of the paper (X only, S only, XSL without MinBound) at 16
+and 64 spp. Finished work in --out is reused: a rerun, or a run after Ctrl-C, does what is left.
 """
 from __future__ import annotations
 
@@ -25,11 +17,13 @@ from pathlib import Path
 from .experiment import add_quality_arguments, run_and_report
 
 NAME = "demo"
-HELP = ("the main job: maps, XSL and gold renders of the bundled road scene, comparison, and an "
-        "HTML report (64 spp, about three minutes; --full: every version at 16 and 64 spp)")
+HELP = ("the main job on the bundled road scene: the file as it renders against Auto Volumes in "
+        "the same time, and the paper's maps and renders, in one HTML report (a few minutes; "
+        "--full: every version of the paper at 16 and 64 spp)")
 SCENE = "road"
-QUICK_VARIANTS = ("gold", "xs", "xsl", "uniform_eighth", "uniform_quarter", "uniform_half",
-                  "uniform_equal_time", "adaptive_equal_time", "guided_equal_time")
+QUICK_VARIANTS = ("gold", "auto_file_samples", "auto_equal_time", "xs", "xsl", "uniform_eighth",
+                  "uniform_quarter", "uniform_half", "uniform_equal_time", "adaptive_equal_time",
+                  "guided_equal_time")
 #: The example scenes' own ceiling (the default), and the ceilings of --full: the paper's 16 too.
 DEFAULT_CEILING = 64
 FULL_CEILINGS = (16, 64)
@@ -39,6 +33,7 @@ OUTPUTS_AS_A_SET = False
 
 def add_arguments(parser) -> None:
     from . import argtypes
+    from .option_flags import add_option
 
     parser.add_argument("--out", default="xsl-demo", metavar="DIR", type=argtypes.output_folder(),
                         help="output folder; finished work in it is reused (default xsl-demo)")
@@ -49,7 +44,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     # For tests and quick looks: a smaller frame, another ceiling, another scene.
     parser.add_argument("--resolution", type=argtypes.RESOLUTION, help=argparse.SUPPRESS)
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None, help=argparse.SUPPRESS)
+    add_option(parser, "max_spp", help=argparse.SUPPRESS)
     parser.add_argument("--scene", type=argtypes.SCENE, help=argparse.SUPPRESS)
 
 
@@ -73,7 +68,8 @@ def run(args) -> int:
     jobs = [SceneJob(name if len(ceilings) == 1 else f"{name}_{spp}spp", path, max_spp=spp,
                      compare_minbound=args.full) for spp in ceilings]
     what = ("every version" if args.full
-            else "gold, XS, XSL, uniform at 1/8-1/2 of the ceiling, uniform, adaptive and guided at XSL's time")
+            else "the file against Auto Volumes in its time and at its samples; XS, XSL, uniform at "
+                 "1/8-1/2 of the ceiling, uniform, adaptive and guided at XSL's time")
     size = args.resolution or "the scene's own size"
     print(f"demo: {name}.blend at {size}, {' and '.join(map(str, ceilings))} spp: maps, {what}, "
           f"MSE/FLIP/VDP against the converged reference, report in {out}", file=sys.stderr)

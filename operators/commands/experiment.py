@@ -40,22 +40,18 @@ def add_arguments(parser) -> None:
 
 def add_run_arguments(parser) -> None:
     """Ceiling, size, tiles, seed, denoising, VDP."""
-    from ...core.checks import MAX_SIDE
-    from ...core.sampling.render_options import MIN_TILE_SIZE
     from . import argtypes
+    from .option_flags import add_option
 
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=16,
-                        help="samples per pixel of the gold standard and ceiling of the maps "
-                             "(default 16, the paper's)")
+    add_option(parser, "max_spp", default=16,
+               help="samples per pixel of the gold standard and ceiling of the maps (the paper's 16)")
     parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
                         help="render every scene at this size")
     parser.add_argument("--size", type=argtypes.integer(8, 16384), metavar="N",
                         help="scale each scene to N pixels on its longer side (the paper: 512; "
                              "default: each scene's own resolution)")
-    parser.add_argument("--min-spp", type=argtypes.SAMPLES, default=1, help="samples floor per pixel (default 1)")
-    parser.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, MAX_SIDE), default=32,
-                        help="tile edge in pixels (default 32)")
-    parser.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
+    for name in ("min_spp", "tile_size", "seed"):
+        add_option(parser, name)
     add_quality_arguments(parser, "samples of the converged reference each run is measured "
                                   "against (default max(1024, 16 x the ceiling); cached)")
 
@@ -63,12 +59,12 @@ def add_run_arguments(parser) -> None:
 def add_quality_arguments(parser, reference_help: str | None = None) -> None:
     """--denoise, --vdp and --reference-spp, shared with ``demo`` (which hides the last)."""
     from . import argtypes
+    from .option_flags import add_option
 
     parser.add_argument("--reference-spp", type=argtypes.SAMPLES, metavar="N",
                         help=reference_help or argparse.SUPPRESS)
-    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
-                        help="denoise every finished frame with Open Image Denoise, gold and "
-                             "selective alike (default on; off compares the raw path-traced frames)")
+    add_option(parser, "denoise", help="denoise every finished frame with Open Image Denoise, every "
+                                       "run alike (off compares the raw path-traced frames)")
     parser.add_argument("--vdp", action=argparse.BooleanOptionalAction, default=True,
                         help="run ColorVideoVDP when it is installed (default on; it is slow)")
 

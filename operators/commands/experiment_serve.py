@@ -1,17 +1,10 @@
 """``xsl-render experiment-serve STIMULI_DIR``: run the paper's 2AFC experiment in a browser.
 
-STIMULI_DIR holds one pair of PNG files per scene, shown pixel for pixel (no scaling)::
-
-    <scene>.gold.png    the gold standard
-    <scene>.test.png    the selective rendering (same size)
-
-Each participant registers (id, age range, corrected vision), is given a condition (by
-default alternating: no reference, reference, ...) and does one trial per scene, in random
-order, with the gold standard's place counterbalanced over participants. Every answer is
-committed to the SQLite database (default STIMULI_DIR/experiment.sqlite) when it is given,
-with the display time stamps the page measured; ``xsl-render experiment-analyse DB``
-analyses it.
-"""
+STIMULI_DIR holds ``<scene>.gold.png`` and ``<scene>.test.png`` per scene, shown pixel for pixel.
+Each participant registers, is given a condition (alternating: no reference, reference) and
+does one trial per scene in random order, the gold standard's place counterbalanced; every
+answer is committed to SQLite (default STIMULI_DIR/experiment.sqlite) as it is given, with the
+display time stamps the page measured. ``xsl-render experiment-analyse DB`` analyses it."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -19,17 +19,16 @@ from pathlib import Path
 
 from ...core.errors import InputError
 from ...core.farm.blender_job import BLENDER
-from ...core.farm.farm_job import DEFAULT_FRAMES_PER_TASK, MAX_FRAMES_PER_TASK
+from ...core.option_table import DEFAULT_TASKS_PER_FRAME, OPTIONS
 from ...core.farm.worker_environment import WorkerSetup
 from ...core.farm.worker_setup import SETUPS
 from . import argtypes
 from .common import add_guided_arguments, add_map_arguments, add_tile_arguments, parse_resolution
+from .option_flags import add_option
 from .options_from_args import guided_options_from_args, guided_render_options, map_options_from_args
 
 NAME = "farm"
 HELP = "write an Open Job Description job bundle that renders the scene on a render farm"
-DEFAULT_TASKS_PER_FRAME = 4
-DEVICES = ("CPU", "GPU")
 #: The longest task timeout: a week, as the longest time budget (core.farm.farm_job checks it).
 MAX_TIMEOUT = 7 * 24 * 3600
 
@@ -44,9 +43,9 @@ def add_arguments(parser) -> None:
                              "(default: the scene's range)")
     parser.add_argument("--resolution", metavar="WxH", type=argtypes.RESOLUTION,
                         help="render resolution (default: the scene's)")
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES,
-                        help="samples per pixel where the map is 1 (default: the scene's Cycles "
-                             "samples); guided: an optional per-pixel ceiling (default none)")
+    add_option(parser, "max_spp", note=False,
+               help="samples per pixel where the map is 1 (default: the scene's Cycles samples); "
+                    "guided: an optional per-pixel ceiling (default none)")
     parser.add_argument("--mode", choices=("blender", "xs", "xsl", "guided"), default=None,
                         help="blender (the default for an animation): Blender renders the file as "
                              "it is set up, with Auto Volumes, a chunk of frames a task; xs, xsl "
@@ -57,22 +56,17 @@ def add_arguments(parser) -> None:
                              f"xsl_render extension installed (default {BLENDER})")
     parser.add_argument("--auto-volumes", action=argparse.BooleanOptionalAction, default=True,
                         help="--mode blender: render with Auto Volumes (default on)")
-    parser.add_argument("--tasks-per-frame", type=int, default=None,
-                        help="xs, xsl: tile tasks per frame, sharing its rectangles at about equal "
-                             f"cost (default {DEFAULT_TASKS_PER_FRAME})")
-    parser.add_argument("--frames-per-task", metavar="N", type=argtypes.integer(1, MAX_FRAMES_PER_TASK),
-                        default=DEFAULT_FRAMES_PER_TASK,
-                        help="frames each task renders in one Blender process, the scene synced "
-                             f"once for all (default {DEFAULT_FRAMES_PER_TASK}; parameter "
-                             "FramesPerTask; the tasks' timeout is made for this many)")
+    add_option(parser, "tasks_per_frame")
+    add_option(parser, "frames_per_task", metavar="N",
+               help=f"{OPTIONS['frames_per_task'].help} (parameter FramesPerTask; the tasks' timeout "
+                    "is made for this many)")
     parser.add_argument("--output", metavar="DIR",
                         help="where the job writes its frames (default: DIR/output of the bundle)")
     parser.add_argument("--executable", metavar="PATH",
                         help="the xsl-render command on the farm's machines (default: xsl-render, "
                              "found on each worker's PATH)")
-    parser.add_argument("--device", choices=DEVICES,
-                        help="Cycles device of the renders; GPU makes the rendering steps ask for "
-                             "a GPU in their host requirements (default: the scene's device)")
+    add_option(parser, "device", help="Cycles device of the renders; GPU makes the rendering steps "
+                                      "ask for a GPU in their host requirements")
     parser.add_argument("--task-timeout", metavar="SECONDS", type=argtypes.integer(1, MAX_TIMEOUT),
                         help="seconds a task may run before the farm cancels it (default: for "
                              "each frame of a task, twice the time budget plus 15 minutes for "
@@ -266,7 +260,6 @@ def _warn(scene, files) -> None:
 def _guided_or_tiles(args):
     """(GuidedOptions, 1) for --mode guided, (None, tile tasks per frame) for xs and xsl;
     InputError for an option of the other kind."""
-    from ...core.farm.task_groups import check_groups
     from ...core.sampling.render_request import MODE_TRAITS
 
     if MODE_TRAITS[args.mode].time_budget:
@@ -275,6 +268,4 @@ def _guided_or_tiles(args):
         return guided_options_from_args(args), 1
     if args.time_budget is not None:
         raise InputError(f"--time-budget is for --mode guided (got --mode {args.mode})")
-    tasks = DEFAULT_TASKS_PER_FRAME if args.tasks_per_frame is None else args.tasks_per_frame
-    check_groups(tasks)
-    return None, tasks
+    return None, DEFAULT_TASKS_PER_FRAME if args.tasks_per_frame is None else args.tasks_per_frame

@@ -1,33 +1,13 @@
-"""``xsl-render farm-task maps|tiles|composite|guided``: the steps of a farm job (``xsl-render farm``).
+"""``xsl-render farm-task maps|tiles|composite|guided``: the steps of a farm job (``xsl-render
+farm``), which the job template calls.
 
-The job template calls these; a person rarely does. Each takes one frame (``--frame N``) or
-a chunk of frames (``--frames 1-8``, ``--frames 9,11,15-17``: what the template's
-``{{Task.Param.Frame}}`` expands to) and renders a chunk's frames one after another in one
-Blender process, Cycles syncing the scene once. Each is safe to run again: finished, current
-results (a frame's plan, a rectangle, a finished frame) are kept (``core.farm.files``), so a
-crashed or cancelled job resumes, rendering only what a killed task had not finished.
-
-    farm-task maps SCENE.blend --frame N|--frames F --output DIR --scene-name S --mode xs|xsl
-        --max-spp N --resolution WxH [map options] [tile options]
-        -> DIR/work/frame_NNNN/maps/ and plan.json of each frame
-    farm-task tiles SCENE.blend --frame N|--frames F --output DIR --group G --groups K
-        -> DIR/work/frame_NNNN/tiles/<rectangle>.exr + .json for the rectangles of task G of K
-    farm-task composite --frame N|--frames F --output DIR [--groups K]
-        -> DIR/frame_NNNN.exr, frame_NNNN_spp.exr/.png, frame_NNNN.json
-    farm-task guided SCENE.blend --frame N|--frames F --output DIR --scene-name S --resolution WxH
-        --time-budget SECONDS [--max-spp N (0: no ceiling)] [--importance none|x|xs|xsl]
-        [--pilot-fraction F] [--guided-exponent Y] [--level-ratio R] [--tile-size N] [--seed N]
-        [map options]
-        -> the same files as composite, each frame rendered with the guided sampler within
-           the time budget
-
-maps, tiles and guided take ``--device CPU|GPU`` (the job's Device; default: the scene's).
-Every step prints ``openjd_progress: N`` (over the whole chunk) and ``openjd_status: text``
-lines as it goes, which a farm shows in its monitor, and one line per frame at the end
-(rendered now or already done). A cancelled task (SIGTERM, the template's
-NOTIFY_THEN_TERMINATE) removes its temporaries and exits 143 (``operators/signals.py``):
-what it finished stays, nothing half-written does.
-"""
+Each takes a frame (``--frame N``) or a chunk (``--frames 1-8``, what the template's
+``{{Task.Param.Frame}}`` expands to) and renders its frames in one Blender process: ``maps``
+(director maps and tile plan per frame), ``tiles`` (task G of K's rectangles), ``composite``
+(the frame's EXR, samples and record) and ``guided`` (whole frames within a time budget).
+Each is safe to run again: current results are kept (``core.farm.files``). Every step prints
+Open Job Description's progress and status lines; a cancelled task exits 143 with nothing
+half-written."""
 from __future__ import annotations
 
 import sys
@@ -38,6 +18,7 @@ from ...core.farm.task_progress import TaskProgress
 from . import argtypes
 from .common import (add_guided_arguments, add_map_arguments, add_tile_arguments, parse_resolution,
                      warnings_as_lines)
+from .option_flags import add_option
 from .options_from_args import (guided_options_from_args, guided_render_options, map_options_from_args,
                                 render_options_from_args)
 
@@ -45,7 +26,6 @@ NAME = "farm-task"
 HELP = ("run one task of a farm job (maps, tiles or composite of a frame, or a guided frame); "
         "used by job templates")
 MODES = ("xs", "xsl")
-DEVICES = ("CPU", "GPU")
 #: Each task keeps what it finished, with what it was made from, so a rerun resumes.
 OUTPUTS_AS_A_SET = False
 
@@ -59,12 +39,11 @@ def _frame_arguments(parser, renders: bool = True) -> None:
     parser.add_argument("--output", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="the job's output folder")
     if renders:
-        parser.add_argument("--device", choices=DEVICES, help="the Cycles device (default: the scene's)")
+        add_option(parser, "device", help="the Cycles device")
 
 
 def add_arguments(parser) -> None:
     from ...core import checks
-    from ...core.sampling.render_options import MIN_TILE_SIZE
 
     steps = parser.add_subparsers(dest="step", metavar="STEP")
     steps.required = True
@@ -75,8 +54,7 @@ def add_arguments(parser) -> None:
     maps.add_argument("--scene-name", required=True, help="which scene of the file")
     _frame_arguments(maps)
     maps.add_argument("--mode", required=True, choices=MODES, help="which director map plans the tiles")
-    maps.add_argument("--max-spp", type=argtypes.SAMPLES, required=True,
-                      help="samples per pixel where the map is 1")
+    add_option(maps, "max_spp", required=True, note=False, help="samples per pixel where the map is 1")
     maps.add_argument("--resolution", required=True, metavar="WxH", type=argtypes.RESOLUTION,
                       help="render resolution")
     _map_arguments(maps)
@@ -103,9 +81,8 @@ def add_arguments(parser) -> None:
     guided.add_argument("--max-spp", type=argtypes.integer(0, checks.MAX_SAMPLES), default=0,
                         help="the most samples any pixel may get; 0: no ceiling (default)")
     add_guided_arguments(guided, budget_required=True)
-    guided.add_argument("--tile-size", type=argtypes.integer(MIN_TILE_SIZE, checks.MAX_SIDE), default=32,
-                        help="edge of the tiles the samples are allocated on (default 32)")
-    guided.add_argument("--seed", type=argtypes.SEED, default=0, help="Cycles seed for every render (default 0)")
+    add_option(guided, "tile_size", help="edge of the tiles the samples are allocated on")
+    add_option(guided, "seed")
     _map_arguments(guided)
 
 
@@ -126,13 +103,16 @@ def _chunk(frames: tuple[int, ...]) -> str:
 
 
 def check(args) -> None:
-    """A guided task's options taken together (``GuidedOptions.check`` and its render options,
-    --max-spp 0 being the job template's "no ceiling"), before anything loads."""
+    """A guided task's request (its time budget and render options, --max-spp 0 being the job
+    template's "no ceiling") or a maps task's render options, checked before anything loads;
+    ``run`` renders what is checked here."""
     if args.step == "guided":
         from ...core.sampling.render_request import RenderRequest
 
-        RenderRequest("guided", guided_render_options(args, parse_resolution(args.resolution)),
-                      guided=guided_options_from_args(args)).check()
+        args.request = RenderRequest("guided", guided_render_options(args, parse_resolution(args.resolution)),
+                                     guided=guided_options_from_args(args)).check()
+    elif args.step == "maps":
+        args.options = render_options_from_args(args).check()
 
 
 def _map_arguments(parser) -> None:
@@ -156,7 +136,7 @@ def _maps(args) -> int:
 
     frames = _frames(args)
     map_options = _map_options(args)
-    options = render_options_from_args(args)
+    options = args.options                      # checked by ``check``
     report = TaskProgress()
     report.status(f"{_chunk(frames)}: director maps and tile plans")
     with warnings_as_lines(MapWarning, XMapWarning):
@@ -230,8 +210,7 @@ def _guided(args) -> int:
     from ...core.maps.xmap import XMapWarning
 
     frames = _frames(args)
-    guided = guided_options_from_args(args)
-    options = guided_render_options(args, parse_resolution(args.resolution))   # --max-spp 0: none
+    guided, options = args.request.guided, args.request.options      # checked by ``check``
     map_options = _map_options(args)
     report = TaskProgress()
     report.status(f"{_chunk(frames)}: guided render within {guided.time_budget:g} s a frame")

@@ -14,32 +14,35 @@ from .common import parse_resolution
 
 
 def guided_options_from_args(args):
-    """``GuidedOptions`` from the guided arguments, checked (its ceiling and tile size are
-    the render options')."""
+    """``GuidedOptions`` from the time budget's arguments (checked with the request that holds
+    them; its ceiling and tile size are the render options')."""
     from ...core.sampling.guided_plan import GuidedOptions
 
     if args.time_budget is None:
         raise InputError("--mode guided needs --time-budget SECONDS")
     return GuidedOptions(time_budget=args.time_budget, pilot_fraction=args.pilot_fraction,
-                         exponent=args.guided_exponent, importance=args.importance,
-                         level_ratio=args.level_ratio).check()
+                         exponent=args.exponent, importance=args.importance,
+                         level_ratio=args.level_ratio)
 
 
 def guided_render_options(args, resolution):
-    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm):
-    --max-spp as its ceiling (none given, or 0: ``UNBOUNDED_SPP``), --tile-size, --seed,
-    the resolution, and guided's volume estimator (auto)."""
+    """``RenderOptions`` of a guided render made outside ``xsl-render render`` (the farm),
+    checked: --max-spp as its ceiling (none given, or 0: ``UNBOUNDED_SPP``), --tile-size,
+    --seed, the resolution and --estimator (auto where the command has none)."""
     from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
 
     return RenderOptions(max_spp=args.max_spp or UNBOUNDED_SPP, tile_size=args.tile_size, seed=args.seed,
-                         resolution=resolution, estimator="auto").check()
+                         resolution=resolution, estimator=getattr(args, "estimator", "auto")).check()
 
 
-def render_options_from_args(args):
-    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, checked.
+def render_options_from_args(args, counts_from_scene: bool = False):
+    """``RenderOptions`` from --max-spp, the tile options, --seed and --resolution, unchecked
+    (the request that holds them checks them).
 
-    Every mode but guided needs --max-spp; guided without it has no ceiling but
-    ``UNBOUNDED_SPP``, and uniform given --spp alone takes that count as its ceiling."""
+    Without --max-spp a time budget has no ceiling (``UNBOUNDED_SPP``) and uniform given --spp
+    alone takes that count; otherwise the count is the scene's (``counts_from_scene``: a
+    stand-in until ``RenderRequest.at_scene_samples``) or InputError."""
+    from ...core.checks import MAX_SAMPLES
     from ...core.sampling.render_options import UNBOUNDED_SPP, RenderOptions
     from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
 
@@ -48,27 +51,18 @@ def render_options_from_args(args):
     if max_spp is None and traits.spp and getattr(args, "spp", None) is not None:
         max_spp = args.spp
     if max_spp is None:
-        if not traits.time_budget:
+        if traits.time_budget:
+            max_spp = UNBOUNDED_SPP
+        elif counts_from_scene:
+            max_spp = MAX_SAMPLES
+        else:
             raise InputError(f"--mode {mode} needs --max-spp N" if mode else "--max-spp N is needed")
-        max_spp = UNBOUNDED_SPP
     return RenderOptions(
         max_spp=max_spp, min_spp=args.min_spp, tile_size=args.tile_size,
         tile_quantile=args.tile_quantile, spp_levels=args.spp_levels, seed=args.seed,
         margin=args.margin, render_cost=args.render_cost, adaptive_threshold=args.adaptive_threshold,
         resolution=parse_resolution(args.resolution), denoise=args.denoise,
-        estimator=estimator_from_args(args), step_rate=getattr(args, "step_rate", None)).check()
-
-
-def estimator_from_args(args) -> str:
-    """--estimator, or its default: auto for guided (a time budget is spent best where the
-    medium's estimate costs least), the scene's own settings for every other mode (the
-    baselines and the paper's modes render what the scene asks for)."""
-    from ...core.sampling.render_request import MODE_TRAITS, ModeTraits
-
-    chosen = getattr(args, "estimator", None)
-    if chosen is not None:
-        return chosen
-    return MODE_TRAITS.get(getattr(args, "mode", None), ModeTraits()).default_estimator
+        estimator=getattr(args, "estimator", "scene"), step_rate=getattr(args, "step_rate", None))
 
 
 def map_options_from_args(args) -> MapOptions:
@@ -103,12 +97,14 @@ def render_request_from_args(args) -> tuple:
     xs or xsl render reads instead of computing its maps (None without --map/--maps).
 
     Every flag goes into the request as given; what a mode takes is the request's own
-    check (``MODE_TRAITS``). A stats file gives the budget its mode is measured by."""
+    check (``MODE_TRAITS``). A stats file gives the budget its mode is measured by. Counts
+    not given are the scene's samples (``RenderRequest.scene_samples``)."""
     from ...core.sampling.guided_plan import GuidedOptions
     from ...core.sampling.render_request import MODE_TRAITS, RenderRequest
 
-    options = render_options_from_args(args)
     traits = MODE_TRAITS[args.mode]
+    from_scene = args.max_spp is None and not traits.time_budget and not (traits.spp and args.spp is not None)
+    options = render_options_from_args(args, counts_from_scene=from_scene)
     if traits.time_budget:
         guided = guided_options_from_args(args)
     elif args.time_budget is not None:
@@ -138,12 +134,11 @@ def render_request_from_args(args) -> tuple:
             spp, mean_spp = max(1, int(round(recorded.mean_spp))), recorded.mean_spp
         else:
             seconds = render_budget(recorded, args.budget_from)
-    if traits.budget_from and spp is None and seconds is None:
-        needs = (["--spp N"] if traits.spp else []) + ["--budget-from STATS.json"]
-        raise InputError(f"--mode {args.mode} needs {', '.join(needs)} or --equal-time SECONDS")
+    if traits.spp and spp is None and seconds is None and not from_scene:
+        spp = options.max_spp               # uniform without a budget renders its ceiling
     request = RenderRequest(args.mode, options, spp=spp, seconds=seconds, noise_threshold=args.noise_threshold,
                             guided=guided, map_options=map_options_from_args(args) if computes_maps else None,
-                            budget_from=budget_from, budget_mean_spp=mean_spp)
+                            budget_from=budget_from, budget_mean_spp=mean_spp, scene_samples=from_scene)
     return request.check(), map_file
 
 

@@ -24,6 +24,7 @@ def add_arguments(parser) -> None:
     from ...core.validation.reference import REFERENCE_SEED
     from . import argtypes
     from .common import add_scene_arguments
+    from .option_flags import add_option
 
     add_scene_arguments(parser)
     parser.add_argument("--out", required=True, metavar="REF.exr", type=argtypes.output_file(".exr"),
@@ -35,8 +36,7 @@ def add_arguments(parser) -> None:
                              "1-3,8), one after another in one Cycles session, each cached")
     parser.add_argument("--spp", type=argtypes.SAMPLES, metavar="N",
                         help="samples per pixel (default max(1024, 16 x the ceiling))")
-    parser.add_argument("--seed", type=argtypes.SEED, default=REFERENCE_SEED,
-                        help=f"Cycles seed (default {REFERENCE_SEED}; contestants use 0, 1, 2, ...)")
+    add_option(parser, "seed", default=REFERENCE_SEED, help="Cycles seed (contestants use 0, 1, 2, ...)")
     parser.add_argument("--max-spp", type=ceiling, metavar="CEILING",
                         help="the contestants' ceiling the default samples follow (default: the "
                              "scene's own Cycles samples)")

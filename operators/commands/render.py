@@ -1,14 +1,13 @@
 """``xsl-render render SCENE.blend --out FILE.exr``: the file rendered as Blender renders it (its
 samples, denoiser, compositor and outputs) with Auto Volumes (``--estimator scene``: without),
-``addon.blender_render``. With ``--mode``, the paper's renders and the baselines:
-``--mode gold|xs|xsl|uniform|adaptive --max-spp N`` and ``--mode guided --time-budget SECONDS``.
+``addon.blender_render``. With ``--mode``, the paper's renders and the baselines
+(``--mode gold|xs|xsl|uniform|adaptive [--max-spp N]``, counts defaulting to the scene's
+samples) and ``--mode guided --time-budget SECONDS``, every mode with auto's estimator unless
+``--estimator`` says otherwise.
 
-With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per
-pixel; the PNG's grey level is spp / max_spp, or spp / the most any pixel got for guided
-without a ceiling) and, with --stats, the run's statistics as JSON. A ``#`` run in FILE's
-name becomes the frame number; ``--frames START-END`` renders an animation
-(``render_animation.py``).
-"""
+With --mode it writes FILE.exr (RGBA float), FILE_spp.exr and FILE_spp.png (samples per pixel)
+and, with --stats, the run's statistics as JSON; a ``#`` run in FILE's name becomes the frame
+number, and ``--frames`` renders an animation (``render_animation.py``)."""
 from __future__ import annotations
 
 import sys
@@ -21,8 +20,9 @@ from ...core.frames import frame_path, has_frame_marker, parse_frame_list
 from ...core.sampling.render_files import render_output_paths, write_render_outputs
 from . import argtypes
 from .argtypes import declared_files
-from .common import (add_estimator_arguments, add_guided_arguments, add_map_arguments,
-                     add_scene_arguments, add_tile_arguments, warnings_as_lines)
+from .common import (add_guided_arguments, add_map_arguments, add_scene_arguments, add_tile_arguments,
+                     warnings_as_lines)
+from .option_flags import add_option
 from .options_from_args import map_file_of, render_request_from_args
 from .render_modes import check_scene, spp_scale, summary_line
 
@@ -33,29 +33,45 @@ MODES = ("gold", "xs", "xsl", "uniform", "adaptive", "guided")
 
 
 def add_arguments(parser) -> None:
+    # What renders a shot (the file as Blender renders it, with Auto Volumes) comes first.
     add_scene_arguments(parser)
-    parser.add_argument("--mode", choices=MODES, default=None,
-                        help="without it: the file as Blender renders it (its samples, seed, "
-                             "denoiser, compositor and outputs) with Auto Volumes; gold: max-spp "
-                             "everywhere; xs/xsl: samples from the director map; uniform: equal samples (or time) everywhere; adaptive: Cycles' "
-                             "adaptive sampling at equal time; guided: within --time-budget, "
-                             "the samples spread evenly (or by --importance, or by a pilot's "
-                             "error scores with --guided-exponent > 0)")
-    parser.add_argument("--max-spp", type=argtypes.SAMPLES, default=None,
-                        help="samples per pixel where the map is 1 (every mode but guided, where it "
-                             "is an optional per-pixel ceiling, and uniform with --spp, whose "
-                             "count it defaults to)")
     parser.add_argument("--out", required=True, metavar="FILE.exr", type=argtypes.output_file(".exr"),
                         help="the rendered image")
+    add_option(parser, "estimator")       # how Cycles estimates the volumes (volume_estimator)
     parser.add_argument("--stats", metavar="FILE.json", type=argtypes.output_file(),
                         help="write the run's statistics here")
-    parser.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
-                        help="render these frames (1-48, 1-48:2 or a list such as 1-3,8), each "
-                             "with its own maps (the camera rays are cast once while camera and "
-                             "geometry stay still); --out names them "
-                             "like Blender: its last run of # becomes the frame number "
-                             "(out/frame_####.exr), else 4 digits are added before .exr; a rerun "
-                             "keeps the frames an earlier run of the same request finished")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    modes = parser.add_argument_group(
+        "modes: the paper's renders, the baselines and a time budget (without --mode the file "
+        "renders as Blender renders it)")
+    modes.add_argument("--mode", choices=MODES, default=None,
+                       help="gold: max-spp everywhere; xs/xsl: samples from the director map; "
+                            "uniform: equal samples (or time) everywhere; adaptive: Cycles' adaptive "
+                            "sampling; guided: within --time-budget, the samples spread evenly (or "
+                            "by --importance, or by a pilot's error scores with --guided-exponent > 0)")
+    add_option(modes, "max_spp", note=False,
+               help="samples per pixel: every pixel's (gold, uniform), where the director map is 1 "
+                    "(xs, xsl), the ceiling (adaptive, guided); default the scene's own samples, "
+                    "guided none")
+    modes.add_argument("--frames", metavar="FRAMES", type=argtypes.FRAMES,
+                       help="render these frames (1-48, 1-48:2 or a list such as 1-3,8), each "
+                            "with its own maps (the camera rays are cast once while camera and "
+                            "geometry stay still); --out names them "
+                            "like Blender: its last run of # becomes the frame number "
+                            "(out/frame_####.exr), else 4 digits are added before .exr; a rerun "
+                            "keeps the frames an earlier run of the same request finished")
+    budget = parser.add_argument_group("budget (uniform, adaptive)")
+    budget.add_argument("--spp", type=argtypes.SAMPLES,
+                        help="uniform: samples per pixel (default --max-spp, else the scene's own)")
+    budget.add_argument("--budget-from", metavar="STATS.json", type=argtypes.input_file(what="stats file"),
+                        help="stats of a selective run: uniform takes its mean samples, "
+                             "adaptive its wall time")
+    budget.add_argument("--equal-time", nargs="?", type=float, const=-1.0, metavar="SECONDS",
+                        help="uniform: render for this wall time instead (without SECONDS: the "
+                             "wall time in --budget-from); Cycles' own time limit stops it")
+    budget.add_argument("--noise-threshold", type=argtypes.number(above=0.0, hi=1.0), default=None,
+                        help="adaptive: Cycles' noise threshold (default Cycles' own, 0.01)")
+    add_guided_arguments(parser)
     maps = parser.add_argument_group("director map (xs, xsl; computed on the fly unless given)")
     maps.add_argument("--map", metavar="FILE.exr", type=argtypes.input_file(what="director map"),
                       help="the director map, values in [0, 1] at render size")
@@ -64,20 +80,8 @@ def add_arguments(parser) -> None:
     maps.add_argument("--save-maps", metavar="DIR", type=argtypes.output_folder(),
                       help="also write the maps computed on the fly here")
     add_map_arguments(parser)
-    add_tile_arguments(parser)
-    add_estimator_arguments(parser)
-    budget = parser.add_argument_group("budget (uniform, adaptive)")
-    budget.add_argument("--spp", type=argtypes.SAMPLES, help="uniform: samples per pixel")
-    budget.add_argument("--budget-from", metavar="STATS.json", type=argtypes.input_file(what="stats file"),
-                        help="stats of a selective run: uniform takes its mean samples, "
-                             "adaptive its wall time")
-    budget.add_argument("--equal-time", nargs="?", type=float, const=-1.0, metavar="SECONDS",
-                        help="uniform: render for this wall time instead (without SECONDS: the "
-                             "wall time in --budget-from)")
-    budget.add_argument("--noise-threshold", type=argtypes.number(above=0.0, hi=1.0), default=None,
-                        help="adaptive: Cycles' noise threshold (default Cycles' own, 0.01)")
-    add_guided_arguments(parser)
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_tile_arguments(parser, modes)
+    add_option(parser.add_argument_group("volume estimator (expert)"), "step_rate", metavar="RATE")
 
 
 def files(args, out: str | Path | None = None) -> tuple[dict, dict]:
@@ -143,7 +147,7 @@ def _check_as_blender(args) -> None:
         if getattr(args, name, None) is not None:
             flag = "--" + name.replace("_", "-")
             raise InputError(f"{flag} needs --mode (without it the file renders as Blender renders it)")
-    if args.estimator not in (None, "auto", "scene"):
+    if args.estimator not in ("auto", "scene"):
         raise InputError(f"--estimator {args.estimator} needs --mode (without it: auto, Auto Volumes, "
                          "or scene, the file's own settings)")
 
@@ -212,7 +216,9 @@ def run(args) -> int:
     from ..progress_bar import ProgressBar
 
     scene = open_blend(args.scene, args.scene_name)
-    check_scene(scene, options, args.mode)
+    request = request.at_scene_samples(int(scene.cycles.samples))     # counts left to the scene
+    options = request.options
+    check_scene(scene, options, args.mode, director_map)
     if frames is not None:
         from .render_animation import render_frames
 

@@ -7,16 +7,20 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def check_scene(scene, options, mode: str) -> None:
-    """What only the opened scene can tell about the inputs, before any work (maps, renders,
-    a progress bar): it has a camera, and (xs, xsl) the tiles fit its frame."""
+def check_scene(scene, options, mode: str, director_map=None) -> None:
+    """What only the opened scene can tell about the inputs, before any work (auto's choice,
+    maps, renders, a progress bar): it has a camera, and (xs, xsl) the tiles and a director
+    map given fit its frame."""
     from ...addon.scene.probe import camera_model, render_size
     from ...core.sampling.render_request import MODE_TRAITS
+    from ...core.sampling.tile_plan import check_director_map
 
     camera_model(scene)
     width, height = options.resolution or render_size(scene)
     if MODE_TRAITS[mode].director_map:
         options.check_frame(width, height)
+        if director_map is not None:
+            check_director_map(director_map, width, height)
 
 
 def spp_scale(request, outcome) -> int:

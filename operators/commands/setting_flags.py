@@ -3,17 +3,18 @@
 Core and the add-on raise ``SettingError`` naming settings by their fields (``min_spp``,
 ``core.errors``); an option's argparse ``dest`` is the field it fills, and argparse derives
 that dest from the option (``--min-spp`` -> ``min_spp``), so the option is the dest read
-back. :data:`FIELD_FLAGS` names the few fields whose option is called otherwise.
+back. The option table names its own (``--guided-exponent`` sets ``exponent``);
+:data:`FIELD_FLAGS` names the few other fields whose option is called otherwise.
 ``tests/test_setting_errors.py`` checks both against every option of every command.
 """
 from __future__ import annotations
 
 from ...core.errors import InputError, SettingError
+from ...core.option_table import OPTIONS
 
 #: Fields whose option is not their name read as a flag: field -> option.
 FIELD_FLAGS = {
     "ceiling": "--max-spp",             # CurvesSettings, the contestants' and references' ceiling
-    "exponent": "--guided-exponent",    # GuidedOptions
     "seconds": "--equal-time",          # RenderRequest: uniform's equal time, adaptive's
     "longest_side": "--size",           # ValidationSettings
     "setup": "--worker-setup",          # WorkerSetup (farm)
@@ -24,8 +25,12 @@ FIELD_FLAGS = {
 
 
 def flag(field: str) -> str:
-    """The option that sets ``field``: ``min_spp`` -> ``--min-spp``, argparse's rule for a
-    dest read backwards, unless :data:`FIELD_FLAGS` says otherwise."""
+    """The option that sets ``field``: the option table's (``core.option_table``), else
+    :data:`FIELD_FLAGS`', else argparse's rule for a dest read backwards (``min_spp`` ->
+    ``--min-spp``)."""
+    option = OPTIONS.get(field)
+    if option is not None and option.option:
+        return option.option
     return FIELD_FLAGS.get(field) or "--" + field.replace("_", "-")
 
 

@@ -7,7 +7,6 @@ only the media change).
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import warnings
 from pathlib import Path
@@ -15,6 +14,7 @@ from pathlib import Path
 from ...core.errors import InputError
 from . import argtypes
 from .common import add_scene_arguments, parse_resolution
+from .option_flags import add_option
 
 #: Midpoint samples per interval: beyond this a reference march takes hours at any size.
 MAX_SAMPLES = 4096
@@ -26,8 +26,7 @@ def add_arguments(parser) -> None:
     add_scene_arguments(parser)
     parser.add_argument("--out", required=True, metavar="DIR", type=argtypes.output_folder(),
                         help="folder for z.exr, x.exr, xmap.json")
-    parser.add_argument("--minbound", action=argparse.BooleanOptionalAction,
-                        default=True, help="fill sky pixels with the smallest X (paper's MinBound)")
+    add_option(parser, "minbound")
     parser.add_argument("--tolerance", type=argtypes.number(above=0.0, below=1.0), default=None,
                         help="transmittance tolerance of the adaptive ray grid that integrates "
                              "heterogeneous media (smaller is slower and closer; default 0.03)")

@@ -1,26 +1,12 @@
-"""A seeded generator of small scenes with participating media: the randomized X-map oracle
-suite (``test_xmap_random.py``, ``bench/bench_xmap_oracle.py``) builds one per seed and
-compares X with what Cycles renders.
+"""A seeded generator of small scenes with participating media, for the randomized X-map oracle
+suite (``test_xmap_random.py``, ``bench/bench_xmap_oracle.py``): X compared with what Cycles
+renders.
 
-A scene draws, from ``numpy.random.default_rng(seed)``:
-
-* a camera: perspective (focal length, sometimes a lens shift) or orthographic, placed
-  outside every volume, inside one, with its eye exactly on a volume box's face, or
-  with its clip start beyond a box's near face;
-* a ground plane at z = 0 (sometimes a subdivided grid) and a few surfaces (cube, UV and
-  ico sphere, cylinder, cone, torus), some rotated, some mirrored, some resting on the
-  ground;
-* object volumes: boxes (often resting on the ground, as fog boxes are), spheres,
-  cylinders, cones, tori (not convex); nested (a sphere inside a box), stacked (two boxes
-  sharing a face) or side by side sharing a face; with Principled Volume, Volume Scatter,
-  Volume Absorption or Volume Coefficients, their density constant, a Noise Texture or a
-  Gradient Texture (object or generated coordinates);
-* sometimes a world volume (constant or noise) and an OpenVDB smoke grid made by
-  geometry nodes (as the statue example builds it, no file needed).
-
-Densities are drawn so that a volume's optical depth across it lies around 0.2 to 2:
-every map is neither empty nor black. ``describe`` lists what a scene holds.
-"""
+From ``numpy.random.default_rng(seed)``: a perspective or orthographic camera outside, inside
+or on the face of a volume; a ground plane and a few surfaces; object volumes (boxes resting on
+the ground, spheres, cylinders, cones, tori; nested, stacked or sharing a face) with any volume
+shader, their density constant, noise or gradient; sometimes a world volume and an OpenVDB
+smoke grid. Optical depths across a volume of about 0.2 to 2, so no map is empty or black."""
 from __future__ import annotations
 
 import math
