@@ -59,9 +59,6 @@ _jobs: dict[int, _Job] = {}
 _forced: dict[int, bool] = {}
 #: The last shot choice each scene (its pointer) rendered with, for what reports on a render.
 last_plans: dict[int, object] = {}
-#: (first, last) frame of each scene (its pointer) as its file was loaded or saved: farms
-#: split a range with ``-s`` / ``-e``, which set the scene's range before the render.
-_saved_ranges: dict[int, tuple[int, int]] = {}
 #: The last warning printed (for scripts and tests that look at it).
 last_warning = ""
 
@@ -93,29 +90,10 @@ def forced(scene, on: bool = True):
             unregister()
 
 
-def shot_range(scene) -> tuple[int, int]:
-    """The frame range a shot spans: in the interface the scene's own; in the background the
-    range its file was loaded (or last saved) with, as a farm's ``-s`` / ``-e`` may have set
-    another for the frames of one task (an unsaved scene's own range)."""
-    import bpy
-
-    live = (scene.frame_start, scene.frame_end)
-    return _saved_ranges.get(scene.as_pointer(), live) if bpy.app.background else live
-
-
-def remember_ranges() -> None:
-    """Note every scene's frame range as the file has it now (loaded or saved)."""
-    import bpy
-
-    _saved_ranges.clear()
-    for scene in bpy.data.scenes:
-        _saved_ranges[scene.as_pointer()] = (scene.frame_start, scene.frame_end)
-
-
 def current_choice(scene):
     """Auto Volumes' choice (a ``ShotChoice``) for the scene's current frame, as its render
     would make it."""
-    return shot_choice.choose_for_shot(scene, shot_of(scene.frame_current, *shot_range(scene)))
+    return shot_choice.choose_for_shot(scene, shot_of(scene.frame_current, *shot_choice.shot_range(scene)))
 
 
 def apply_to_scene(scene) -> tuple[object, str]:
@@ -183,7 +161,7 @@ def _start(scene) -> None:
 
 
 def _frame_choice(scene, job: _Job):
-    shot = shot_of(scene.frame_current, *shot_range(scene))
+    shot = shot_of(scene.frame_current, *shot_choice.shot_range(scene))
     if shot not in job.shots:
         try:
             job.shots[shot] = shot_choice.choose_for_shot(scene, shot)
@@ -300,13 +278,13 @@ def _on_save_pre(*_):
 
 def _on_load(*_):
     _jobs.clear()
-    remember_ranges()
+    shot_choice.remember_ranges()
 
 
 _HANDLERS = (("render_init", _on_render_init), ("render_pre", _on_render_pre),
              ("render_post", _on_render_post), ("render_complete", _on_render_end),
              ("render_cancel", _on_render_end), ("save_pre", _on_save_pre),
-             ("save_post", lambda *_: remember_ranges()), ("load_post", _on_load))
+             ("save_post", lambda *_: shot_choice.remember_ranges()), ("load_post", _on_load))
 
 
 def register() -> None:
@@ -317,7 +295,7 @@ def register() -> None:
         handlers = getattr(bpy.app.handlers, name)
         if function not in handlers:
             handlers.append(function)
-    remember_ranges()
+    shot_choice.remember_ranges()
 
 
 def unregister() -> None:

@@ -16,13 +16,14 @@ from ..core.maps.options import MapOptions
 from ..core.progress import Steps, scaled_steps, timed_steps
 from ..core.sampling.guided_plan import GuidedOptions
 from ..core.sampling.sequence_budget import SequenceBudget
+from ..core.sampling.shot_plan import shot_of
 from ..core.sampling.render_options import RenderOptions
 from ..core.sampling.render_stats import FrameMaps
 from .cycles.guided_render import guided_steps
 from .cycles.selective_render import RenderOutcome, selective_steps
 from .cycles.tile_render import forget_synced_session
 from .maps.director_maps import map_steps, named_map_steps
-from .maps.estimator_choice import with_estimator_choice
+from .maps.shot_choice import choose_for_shot, shot_range
 from .scene.state import preserved_scene
 
 #: Share of a selective frame's progress bar given to its maps.
@@ -180,19 +181,22 @@ def guided_frame(guided: GuidedOptions, map_options: MapOptions | None, options:
 
 def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: RenderOptions,
                     spp: float) -> FrameJob:
-    """The frame job ``make_job(options)`` with ``--estimator auto`` chosen for each frame
-    (its media may move) before the frame's maps and renders, inside its time. Each frame's
-    choice starts from the frame before's (hysteresis: ``choose_step_rate``), so the step,
-    and the bias with it, does not switch back and forth over a sequence."""
+    """The frame job ``make_job(options)`` with ``--estimator auto`` chosen for each frame's
+    shot (``shot_choice``, as Auto Volumes chooses in Blender's own render) before the
+    frame's maps and renders, inside its time: one choice per shot, so the step, and the
+    bias with it, does not switch within a shot, and frame N's choice is the same whichever
+    frames the run renders."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return make_job(options)
     share = make_job(options).share
-    previous = []
+    shots: dict = {}
 
     def prepare(scene) -> Steps[tuple]:
         yield 0.0, "choosing the volume estimator"
-        chosen = with_estimator_choice(scene, options, spp, previous[-1] if previous else None)
-        previous[:] = [chosen.estimator_choice]
+        shot = shot_of(scene.frame_current, *shot_range(scene))
+        if shot not in shots:
+            shots[shot] = choose_for_shot(scene, shot, options, spp)
+        chosen = replace(options, estimator_choice=shots[shot].choice)
         job = make_job(chosen)
         inner = None
         if job.prepare is not None:

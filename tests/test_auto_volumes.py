@@ -46,7 +46,7 @@ def media_scene(blender, tmp_path, frames=(1, 4), camera_moves=True):
         camera.location.x += 0.05 * (frames[1] - frames[0])
         camera.keyframe_insert("location", frame=frames[1])
     scene.frame_set(frames[0])
-    auto_volumes.remember_ranges()
+    shot_choice.remember_ranges()
     return scene
 
 
@@ -72,8 +72,10 @@ def f12(blender, scene, path) -> np.ndarray:
 
 def test_f12_renders_the_command_lines_auto_choice_and_gives_every_setting_back(
         blender, addon, tmp_path, capsys):
+    from dataclasses import replace
+
     from xsl_render.addon.cycles import selective_render as sr
-    from xsl_render.addon.maps.estimator_choice import with_estimator_choice
+    from xsl_render.addon.maps.shot_choice import choose_for_shot
     from xsl_render.core.sampling.render_options import RenderOptions
 
     scene = media_scene(blender, tmp_path)
@@ -91,7 +93,8 @@ def test_f12_renders_the_command_lines_auto_choice_and_gives_every_setting_back(
     assert (evaluated.volume_biased, evaluated.volume_step_rate) == (True, 1.0)
 
     scene.xsl_render.auto_volumes = False
-    options = with_estimator_choice(scene, RenderOptions(max_spp=SPP, estimator="auto", denoise=False), SPP)
+    options = RenderOptions(max_spp=SPP, estimator="auto", denoise=False)
+    options = replace(options, estimator_choice=choose_for_shot(scene, (1, 4), options, SPP).choice)
     assert options.estimator_choice.biased
     np.testing.assert_array_equal(image, sr.render_gold(scene, options).image)
     assert everything(blender, scene) == before
@@ -115,17 +118,13 @@ def test_an_animation_renders_each_frame_as_the_command_line_does(blender, addon
     from dataclasses import replace
 
     from xsl_render.addon.cycles import selective_render as sr
-    from xsl_render.addon.maps.estimator_choice import choose_estimator
+    from xsl_render.addon.maps.shot_choice import choose_for_shot
     from xsl_render.core.sampling.render_options import RenderOptions
 
     scene = media_scene(blender, tmp_path)
     options = RenderOptions(max_spp=SPP, estimator="auto", denoise=False)
-    own = {}
-    for frame in range(1, 5):
-        scene.frame_set(frame)
-        own[frame] = replace(choose_estimator(scene, options, SPP), remeasure=None, seconds=0.0)
-    scene.frame_set(1)
-    assert len({(c.biased, c.step_rate, str(c.medium_rates)) for c in own.values()}) == 1   # one choice
+    shot = choose_for_shot(scene, (1, 4), options, SPP)
+    own = {frame: shot.choice for frame in range(1, 5)}      # the command line's: one per shot
     scene.xsl_render.auto_volumes = True
     before = everything(blender, scene)
     blender.ops.render.render(animation=True, scene=scene.name)

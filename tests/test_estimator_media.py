@@ -24,6 +24,17 @@ from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_
 W, H = 48, 27
 
 
+@pytest.fixture(autouse=True)
+def _tolerance_units(request, monkeypatch):
+    """The measures here are written against a tolerance of 0.05 / sqrt(spp): the cases are
+    about where a measure falls between counts' tolerances, not about the calibrated
+    constant (``NOISE_AT_ONE_SPP``), which its bench sets. Scenes rendered in Blender keep it."""
+    from xsl_render.core.sampling import volume_estimator
+
+    if request.node.get_closest_marker("blender") is None:
+        monkeypatch.setattr(volume_estimator, "NOISE_AT_ONE_SPP", 0.05)
+
+
 # -- the predictor with a rate per medium ------------------------------------------------
 def _two_fields():
     """Rays 0-3 cross medium "a" only, rays 4-7 medium "b" only (x from 0 to 10)."""
@@ -325,30 +336,6 @@ def test_the_artists_next_render_has_the_materials_own_steps_again(blender, tmp_
             renderer.render(None, 2)
     assert smoke.cycles.volume_step_rate == 1.0
     np.testing.assert_array_equal(artists_render(), before)
-
-
-@pytest.mark.blender
-def test_a_later_frame_keeps_the_frame_befores_media_steps_while_they_pass(blender):
-    """A range's later frame does not search again (a step switching from frame to frame
-    would flicker): it keeps the frame before's media steps when its scene rate is the same
-    and they still pass, else it has none."""
-    from dataclasses import replace
-
-    from xsl_render.addon.maps.estimator_choice import choose_estimator
-    from xsl_render.core.sampling.render_options import RenderOptions
-
-    scene = _two_media_scene(blender)
-    scene.render.resolution_x, scene.render.resolution_y = W, H
-    options = RenderOptions(max_spp=16, estimator="auto")
-    first = choose_estimator(scene, options, 16)
-    assert first.medium_rates == {"material:smoke": 4.0} and first.step_rate == 0.5
-    later = choose_estimator(scene, options, 16, previous=first)
-    assert later.step_rate == 0.5
-    assert later.medium_rates == first.medium_rates and later.medium_settings == first.medium_settings
-    # Steps the new frame's prediction no longer passes: none kept.
-    coarse = replace(first, medium_rates={"material:smoke": 4.0, "material:noise fog": 4.0},
-                     medium_settings={"material:smoke": 8.0, "material:noise fog": 8.0})
-    assert choose_estimator(scene, options, 16, previous=coarse).medium_rates is None
 
 
 @pytest.mark.blender

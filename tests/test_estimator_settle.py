@@ -16,8 +16,19 @@ from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_
                                                        choose_step_rate, chosen_spp, fixed_choice,
                                                        provisional_choice, tolerated_bias)
 
-#: Visible-bias measures of a scene, coarse to fine (the two-media test scene's, rounded).
+#: Visible-error measures of a scene, coarse to fine (the two-media test scene's, rounded).
 MEASURES = {4.0: 0.16, 2.0: 0.11, 1.0: 0.04, 0.5: 0.008, 0.25: 0.0018}
+
+
+@pytest.fixture(autouse=True)
+def _tolerance_units(request, monkeypatch):
+    """The measures here are written against a tolerance of 0.05 / sqrt(spp): the cases are
+    about where a measure falls between counts' tolerances, not about the calibrated
+    constant (``NOISE_AT_ONE_SPP``), which its bench sets. Scenes rendered in Blender keep it."""
+    from xsl_render.core.sampling import volume_estimator
+
+    if request.node.get_closest_marker("blender") is None:
+        monkeypatch.setattr(volume_estimator, "NOISE_AT_ONE_SPP", 0.05)
 
 
 def _auto(spp: float) -> EstimatorChoice:
@@ -89,16 +100,6 @@ def test_the_provisional_choice_marches_where_auto_chose_null_scattering():
     assert provisional_choice(marching) is marching
     hopeless = choose_step_rate(lambda rate: 0.5, 64)          # 50 %: null at any count
     assert hopeless.biased is False and provisional_choice(hopeless) is hopeless
-
-
-def test_a_range_keeps_null_scattering_without_predicting():
-    from xsl_render.core.sampling.volume_estimator import kept_null_scattering
-
-    kept = kept_null_scattering(_auto(1e6), 64)
-    assert kept.biased is False and kept.tried is None
-    assert kept.tolerance == pytest.approx(tolerated_bias(64))
-    for previous in (None, _auto(64), fixed_choice("unbiased", None), fixed_choice("scene", None)):
-        assert kept_null_scattering(previous, 64) is None
 
 
 @pytest.mark.parametrize("choice", [

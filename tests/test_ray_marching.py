@@ -115,14 +115,19 @@ def test_sample_pixels_cover_the_window_evenly():
 
 
 def test_auto_takes_the_largest_rate_within_the_noise():
-    measures = {4.0: 0.30, 2.0: 0.05, 1.0: 0.01, 0.5: 0.004, 0.25: 0.001}
+    from xsl_render.core.sampling.volume_estimator import NOISE_AT_ONE_SPP
+
+    tolerance = tolerated_bias(16)
+    assert tolerance == pytest.approx(NOISE_AT_ONE_SPP / 4)        # the noise of 16 spp
+    # Rate 1 is within 16 spp's tolerance, rate 0.5 only within 64 spp's (half of it).
+    measures = {4.0: 24 * tolerance, 2.0: 4 * tolerance, 1.0: 0.8 * tolerance, 0.5: 0.32 * tolerance,
+                0.25: 0.08 * tolerance}
     asked = []
 
     def measure(rate):
         asked.append(rate)
         return measures[rate]
 
-    assert tolerated_bias(16) == pytest.approx(0.0125)
     choice = choose_step_rate(measure, spp=16)
     assert (choice.biased, choice.step_rate) == (True, 1.0)
     assert asked == [4.0, 2.0, 1.0]                     # stops at the first that passes
@@ -133,56 +138,19 @@ def test_auto_takes_the_largest_rate_within_the_noise():
     assert set(never.to_dict()["tried"]) == {"4", "2", "1", "0.5", "0.25"}
 
 
-@pytest.mark.parametrize("measure_2, previous, expected, asked", [
-    (0.011, None, 2.0, [4.0, 2.0]),             # a first frame: rate 2 is within 0.0125
-    (0.011, (True, 1.0), 1.0, [1.0, 2.0]),      # after rate 1: 2 must pass 0.7 x 0.0125, it does not
-    (0.008, (True, 1.0), 2.0, [1.0, 2.0, 4.0]),  # ... and now it does (4 is tried, fails)
-    (0.011, (True, 2.0), 2.0, [2.0, 4.0]),      # the previous rate itself needs only the tolerance
-    (0.013, (True, 2.0), 1.0, [2.0, 1.0]),      # it fails: the finer rate at once
-    (0.011, (False, None), 1.0, [0.25, 0.5, 1.0, 2.0]),  # after null scattering: up from the finest
+@pytest.mark.parametrize("finest, expected", [
+    (1.01, 0.25),                       # over the tolerance, within twice it: still marching
+    (1.9, 0.25),
+    (2.1, None),                        # past twice the tolerance: null scattering
 ])
-def test_auto_keeps_the_previous_frames_rate_unless_clearly_wrong(measure_2, previous, expected, asked):
-    from xsl_render.core.sampling.volume_estimator import EstimatorChoice
-
-    measures = {4.0: 0.30, 2.0: measure_2, 1.0: 0.005, 0.5: 0.004, 0.25: 0.001}
-    calls = []
-
-    def measure(rate):
-        calls.append(rate)
-        return measures[rate]
-
-    before = None if previous is None else EstimatorChoice("auto", biased=previous[0], step_rate=previous[1])
-    assert choose_step_rate(measure, spp=16, previous=before).step_rate == expected
-    assert calls == asked
-
-
-def test_auto_after_null_scattering_asks_only_the_finest_rate_while_it_fails():
-    from xsl_render.core.sampling.volume_estimator import EstimatorChoice
-
-    calls = []
-    # Within the tolerance (0.0125 at 16 spp) but not the switching margin, and past
-    # 0.7 x twice the tolerance (the finest rate's own margin against null scattering).
-    choice = choose_step_rate(lambda rate: calls.append(rate) or 0.018, spp=16,
-                              previous=EstimatorChoice("auto", biased=False))
-    assert choice.biased is False and calls == [0.25]
-
-
-@pytest.mark.parametrize("finest, previous, expected", [
-    (0.0126, None, 0.25),               # over the tolerance, within twice it: still marching
-    (0.024, None, 0.25),
-    (0.026, None, None),                # past twice the tolerance: null scattering
-    (0.0126, (False, None), 0.25),      # after null scattering: within 0.7 x twice it
-    (0.02, (False, None), None),        # ... but not past it (hysteresis)
-    (0.02, (True, 0.25), 0.25),         # after the finest rate: twice the tolerance holds it
-    (0.026, (True, 0.25), None),
-])
-def test_the_finest_rate_beats_null_scattering_within_twice_the_tolerance(finest, previous, expected):
-    from xsl_render.core.sampling.volume_estimator import NULL_SCATTERING_MARGIN, EstimatorChoice
+def test_the_finest_rate_beats_null_scattering_within_twice_the_tolerance(finest, expected):
+    from xsl_render.core.sampling.volume_estimator import NULL_SCATTERING_MARGIN
 
     assert NULL_SCATTERING_MARGIN == 2.0
-    measures = {4.0: 0.5, 2.0: 0.26, 1.0: 0.13, 0.5: 0.037, 0.25: finest}   # street frame 1's
-    before = None if previous is None else EstimatorChoice("auto", biased=previous[0], step_rate=previous[1])
-    choice = choose_step_rate(measures.get, spp=16, previous=before)
+    tolerance = tolerated_bias(16)
+    measures = {rate: value * tolerance for rate, value in
+                {4.0: 40.0, 2.0: 20.0, 1.0: 10.0, 0.5: 3.0, 0.25: finest}.items()}
+    choice = choose_step_rate(measures.get, spp=16)
     assert choice.step_rate == expected and choice.biased is (expected is not None)
 
 

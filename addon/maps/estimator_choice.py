@@ -1,10 +1,12 @@
 """``--estimator auto`` for a scene: predict ray marching's bias from the media and choose.
 
 The camera rays are cast at a reduced size (about ``PREDICTION_PIXELS`` rays over the
-frame, fewer for a later frame of a range) and the media scanned as the X map scans them; ``core.media.ray_marching`` marches
-them as Cycles would at each candidate step rate and ``core.sampling.volume_estimator``
-picks the rate. Media numpy cannot evaluate (only Cycles can) cannot be predicted: then
-null scattering. The seconds it takes are the run's (a phase of its statistics).
+frame) and the media scanned as the X map scans them; ``core.media.light_paths`` predicts
+the picture's error along the light's whole path (camera and shadow rays marched as Cycles
+marches them at each candidate step rate) and ``core.sampling.volume_estimator`` picks the
+rate. Where the prediction cannot be trusted (media only Cycles can evaluate, lights it
+cannot model, strong multiple scattering, homogeneous media only) the scene's own settings
+are kept and the reason said. The seconds it takes are the run's (a phase of its statistics).
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ from ...core.sampling.render_options import RenderOptions
 from ...core.sampling.light_tree import auto_light_tree
 from ...core.sampling.sample_pattern import auto_sample_pattern
 from ...core.sampling.volume_estimator import (CANDIDATE_RATES, EstimatorChoice, choose_step_rate,
-                                               fixed_choice, homogeneous_choice, kept_null_scattering,
+                                               fixed_choice, homogeneous_choice,
                                                kept_scene_settings, per_medium_rates)
 from ..scene.geometry import kept_carriers, media_by_carrier, scan_scene, step_setting
 from ..scene.light_sampling import links_lights, sampled_lights
@@ -35,31 +37,22 @@ PREDICTION_PIXELS = 600
 #: light, and marching overestimates every bounce's transmittance (a sun-lit cloud with 8
 #: bounces: 3.5-5x the single-scattering error; docs/light_paths.md).
 MULTIPLE_SCATTERING_DEPTH = 0.3
-#: Rays of a later frame of a range, which only asks whether the frame before's choice still
-#: holds (one or two rates, with hysteresis: ``choose_step_rate``). On street's 24 frames
-#: the measure at 200 rays stayed within 10-20 % of 600's (rate 0.25: 0.0083-0.0138 against
-#: 0.0090-0.0133) for a third of the time: 0.3-0.7 s a frame had been 10-15 % of a frame.
-FOLLOWING_FRAME_PIXELS = 200
 
 
-def choose_estimator(scene, options: RenderOptions, spp: float,
-                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
+def choose_estimator(scene, options: RenderOptions, spp: float) -> EstimatorChoice:
     """The volume estimator a run of ``spp`` samples per pixel renders with, and for auto the
     sample pattern (blue noise, its sequence rounded up to a power of two, where the file
     carries the legacy pattern or plain blue noise: ``core.sampling.sample_pattern``), the
     light tree (off where the scene has one light: ``core.sampling.light_tree``) and each
-    medium's volume sampling while it ray-marches (``core.media.scatter_sampling``; not held
-    from frame to frame in a range: a switch changes the noise's look, not the image).
+    medium's volume sampling while it ray-marches (``core.media.scatter_sampling``).
 
     ``options.estimator`` other than auto is taken as given; auto predicts (``_volumes``),
-    never trying a step rate above ``options.step_rate`` when one is given, and keeping
-    ``previous`` (the frame before's choice) unless the prediction clearly says otherwise
-    (``choose_step_rate``); a previous null scattering is kept without predicting
-    (``kept_null_scattering``).
+    never trying a step rate above ``options.step_rate`` when one is given. A range takes
+    one choice per shot (``shot_choice``).
     """
     if options.estimator != "auto":
         return fixed_choice(options.estimator, options.step_rate)
-    return replace(_volumes(scene, options, spp, previous),
+    return replace(_volumes(scene, options, spp),
                    sample_pattern=auto_sample_pattern(scene.cycles.sampling_pattern),
                    light_tree=_light_tree(scene))
 
@@ -74,12 +67,8 @@ def _light_tree(scene) -> bool | None:
                            links_lights(scene))
 
 
-def _volumes(scene, options: RenderOptions, spp: float,
-             previous: EstimatorChoice | None) -> EstimatorChoice:
+def _volumes(scene, options: RenderOptions, spp: float) -> EstimatorChoice:
     """Auto's volume estimator: the prediction of the module notes."""
-    kept = kept_null_scattering(previous, spp)
-    if kept is not None:
-        return kept
     import bpy
 
     started = time.perf_counter()
@@ -96,7 +85,7 @@ def _volumes(scene, options: RenderOptions, spp: float,
     if not media:
         return done(replace(fixed_choice("scene", None), estimator="auto", reason="no participating media"))
     width, height = options.resolution or render_size(scene)
-    count = PREDICTION_PIXELS if previous is None else FOLLOWING_FRAME_PIXELS
+    count = PREDICTION_PIXELS
     scale = min(1.0, math.sqrt(count / (width * height)))
     camera = camera_model(scene, size=(max(4, round(width * scale)), max(4, round(height * scale))))
     rays = cast_camera_rays(camera, geometry)
@@ -121,12 +110,11 @@ def _volumes(scene, options: RenderOptions, spp: float,
     def measure(rate) -> float:
         return 0.0 if predictor is None else predictor.error(rate).visible()
 
-    choice = choose_step_rate(measure, spp, largest=options.step_rate, previous=previous)
-    choice = _per_medium(choice, media, measure, options.step_rate, previous)
-    if previous is None:
-        # Kept for a time-budgeted still's settle, which may need finer rates or the
-        # media's steps at another scene rate (``settled_for``).
-        choice = replace(choice, remeasure=measure)
+    choice = choose_step_rate(measure, spp, largest=options.step_rate)
+    choice = _per_medium(choice, media, measure, options.step_rate)
+    # Kept for a time-budgeted still's settle, which may need finer rates or the media's
+    # steps at another scene rate (``settled_for``).
+    choice = replace(choice, remeasure=measure)
     kept = "".join(f"; {reason}" for reason in kept_carriers(media).values())
     return done(replace(choice, reason=choice.reason + kept, **scatter))
 
@@ -138,31 +126,16 @@ def step_carriers(media) -> dict:
     return media_by_carrier(media, keep=lambda medium: math.isfinite(medium_step(medium)))
 
 
-def _per_medium(choice: EstimatorChoice, media, measure, largest, previous) -> EstimatorChoice:
-    """``per_medium_rates`` for a still or a range's first frame; a later frame keeps the
-    frame before's media rates while its scene rate is the same and they still pass (no
-    search: a step that switched from frame to frame would flicker), else none."""
+def _per_medium(choice: EstimatorChoice, media, measure, largest) -> EstimatorChoice:
+    """``per_medium_rates``: coarser steps for the media whose error allows them."""
     groups = step_carriers(media)
-    if previous is not None:
-        if not (previous.medium_rates and choice.biased and choice.step_rate == previous.step_rate):
-            return choice
-        rates = [choice.step_rate] * len(media)
-        for key, rate in previous.medium_rates.items():
-            for m in groups.get(key, ()):
-                rates[m] = rate
-        value = measure(tuple(rates))
-        if value > max(choice.tolerance, choice.predicted_bias):
-            return choice
-        return replace(choice, medium_rates=previous.medium_rates, medium_settings=previous.medium_settings,
-                       predicted_bias=value)
     own = {key: float(getattr(*step_setting(key))) for key in groups}
     return per_medium_rates(choice, measure, groups, len(media), own, CANDIDATE_RATES, largest)
 
 
-def with_estimator_choice(scene, options: RenderOptions, spp: float,
-                          previous: EstimatorChoice | None = None) -> RenderOptions:
+def with_estimator_choice(scene, options: RenderOptions, spp: float) -> RenderOptions:
     """``options`` with auto's choice for the scene at its current frame (unchanged for the
-    other estimators, or when chosen already); ``previous``: the frame before's choice."""
+    other estimators, or when chosen already)."""
     if options.estimator != "auto" or options.estimator_choice is not None:
         return options
-    return replace(options, estimator_choice=choose_estimator(scene, options, spp, previous))
+    return replace(options, estimator_choice=choose_estimator(scene, options, spp))

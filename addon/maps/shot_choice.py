@@ -18,6 +18,11 @@ from ..scene.animation import scene_moves
 from .estimator_choice import choose_estimator
 
 
+#: (first, last) frame of each scene (its pointer) as its file was loaded or saved: farms
+#: split a range with ``-s`` / ``-e``, which set the scene's range before the render.
+_saved_ranges: dict[int, tuple[int, int]] = {}
+
+
 @dataclass(frozen=True)
 class ShotChoice:
     """What a shot renders with and where that came from."""
@@ -66,8 +71,31 @@ def rendered_layers(scene) -> list:
     return [layer for layer in scene.view_layers if layer.use] or list(scene.view_layers[:1])
 
 
-def choose_for_shot(scene, shot: tuple[int, int]) -> ShotChoice:
-    """Auto's choice for ``shot`` (first, last frame) of ``scene``."""
+def shot_range(scene) -> tuple[int, int]:
+    """The frame range a shot spans: in the interface the scene's own; in the background the
+    range its file was loaded (or last saved) with, as a farm's ``-s`` / ``-e`` may have set
+    another for the frames of one task (an unsaved scene's own range)."""
+    import bpy
+
+    live = (scene.frame_start, scene.frame_end)
+    return _saved_ranges.get(scene.as_pointer(), live) if bpy.app.background else live
+
+
+def remember_ranges() -> None:
+    """Note every scene's frame range as the file has it now (loaded or saved)."""
+    import bpy
+
+    _saved_ranges.clear()
+    for scene in bpy.data.scenes:
+        _saved_ranges[scene.as_pointer()] = (scene.frame_start, scene.frame_end)
+
+
+def choose_for_shot(scene, shot: tuple[int, int], run: RenderOptions | None = None,
+                    run_spp: float | None = None) -> ShotChoice:
+    """Auto's choice for ``shot`` (first, last frame) of ``scene``: for Blender's own render
+    at the file's samples of each view layer, or for a run of this extension's (``run``, at
+    ``run_spp`` samples per pixel). It depends on the shot alone, never on the frames
+    rendered before, so a frame renders the same alone, in a chunk or in the whole range."""
     import bpy
 
     started = time.perf_counter()
@@ -79,14 +107,17 @@ def choose_for_shot(scene, shot: tuple[int, int]) -> ShotChoice:
         for frame in frames:
             scene.frame_set(frame)
             for layer in layers:
-                spp = frame_spp(scene, layer)
-                options = RenderOptions(max_spp=max(1, round(spp)), estimator="auto")
+                spp = frame_spp(scene, layer) if run_spp is None else float(run_spp)
+                options = (RenderOptions(max_spp=max(1, round(spp)), estimator="auto") if run is None
+                           else replace(run, estimator="auto", estimator_choice=None))
                 with bpy.context.temp_override(view_layer=layer):
                     found.append((choose_estimator(scene, options, spp), frame, layer.name, spp))
     finally:
         scene.frame_set(own[0], subframe=own[1])
     best = most_cautious([choice for choice, *_ in found])
     choice, frame, layer, spp = found[best]
-    # (Its prediction is not kept: it holds the evaluated scene of a frame that is gone.)
-    return ShotChoice(shot, replace(choice, remeasure=None), frame, layer, frames, spp,
-                      time.perf_counter() - started)
+    if len(frames) > 1:
+        # A still keeps its prediction (a time budget's settle asks it again); a shot's would
+        # answer for one sampled frame only.
+        choice = replace(choice, remeasure=None)
+    return ShotChoice(shot, choice, frame, layer, frames, spp, time.perf_counter() - started)

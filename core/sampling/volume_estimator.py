@@ -46,9 +46,6 @@ CANDIDATE_RATES = (4.0, 2.0, 1.0, 0.5, 0.25)
 #: Relative pixel error the noise of one sample per pixel leaves (after denoising), see the
 #: module notes.
 NOISE_AT_ONE_SPP = 0.15
-#: Share of the tolerance a step rate coarser than the previous frame's must stay within
-#: (hysteresis, see ``choose_step_rate``).
-SWITCH_MARGIN = 0.7
 #: When no rate is within the tolerance, the finest still beats null scattering while within
 #: this many times it. The tolerance answers "does a coarser step beat a finer one" (its
 #: calibration, module notes); against null scattering the bias competes with null
@@ -180,48 +177,15 @@ def fixed_choice(estimator: str, step_rate: float | None) -> EstimatorChoice:
 
 
 def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
-                     largest: float | None = None,
-                     previous: EstimatorChoice | None = None) -> EstimatorChoice:
-    """``auto``: the largest rate whose visible bias ``measure_at(rate)`` is within the
-    tolerance of ``spp`` samples per pixel, else null scattering.
-
-    ``measure_at`` is called from the largest rate down and stops at the first that passes
-    (the small rates cost the most to predict). ``largest`` caps the rates tried (a step
-    rate given with ``auto``).
-
-    ``previous``: the choice made for the frame before (an animation). The search then starts
-    from it and moves one rate at a time (the bias grows with the step, so the first rate
-    that passes going up, or fails going down, settles it; a frame costs one or two
-    predictions instead of up to five). A rate coarser than the previous one must pass
-    ``SWITCH_MARGIN`` times the tolerance, so that a measure wavering around the tolerance
-    does not switch the step, and the bias with it, from frame to frame (a static part of the
-    frame would flicker); a finer rate is taken as soon as the previous one fails.
-    """
-    tolerance = tolerated_bias(spp)
+                     largest: float | None = None) -> EstimatorChoice:
+    """``auto``: the largest rate whose visible error ``measure_at(rate)`` is within the
+    tolerance of ``spp`` samples per pixel, else the finest within the null scattering
+    margin, else null scattering. ``measure_at`` is called from the largest rate down and
+    stops at the first that passes (the small rates cost the most to predict); ``largest``
+    caps the rates tried (a step rate given with ``auto``). A frame range takes one choice
+    per shot (``addon.maps.shot_choice``), so nothing here depends on the frame before."""
     ordered = sorted((r for r in rates if largest is None or r <= largest), reverse=True)
-    sticky = previous is not None and previous.estimator == "auto" and previous.biased is not None \
-        and (not previous.biased or previous.step_rate in ordered)
-    if not sticky:
-        return _first_passing(measure_at, ordered, tolerance, spp, {})
-    tried: dict = {}
-    # Index of the previous choice; null scattering sits below the finest rate.
-    start = ordered.index(previous.step_rate) if previous.biased else len(ordered)
-    if start < len(ordered):
-        tried[ordered[start]] = measure_at(ordered[start])
-        if tried[ordered[start]] > tolerance:          # it fails now: finer rates, as usual
-            return _first_passing(measure_at, ordered[start + 1:], tolerance, spp, tried, ordered)
-    best = start
-    for index in range(start - 1, -1, -1):              # coarser, with the margin
-        tried[ordered[index]] = measure_at(ordered[index])
-        if tried[ordered[index]] > SWITCH_MARGIN * tolerance:
-            break
-        best = index
-    if best == len(ordered):
-        # After null scattering the finest rate must clear the hysteresis margin too.
-        return _finest_or_null(tried, ordered, tolerance, spp, SWITCH_MARGIN)
-    rate = ordered[best]
-    kept = " (the previous frame's)" if best == start else ""
-    return _marching(rate, tried, tolerance, spp, kept)
+    return _first_passing(measure_at, ordered, tolerated_bias(spp), spp, {})
 
 
 def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: int, own: dict,
@@ -286,24 +250,6 @@ def homogeneous_choice() -> EstimatorChoice:
     save, and its noise at equal samples is at best the same (docs/light_paths.md)."""
     return kept_scene_settings("homogeneous media only: both estimators are unbiased there and "
                                "ray marching saves nothing")
-
-
-def kept_null_scattering(previous: EstimatorChoice | None, spp: float) -> EstimatorChoice | None:
-    """A frame range that chose null scattering keeps it, without predicting again (None: no
-    such frame before, predict as usual).
-
-    Its octree is built by then, so ray marching could only win on cost per sample, which the
-    bias prediction does not see; and it lost there on street (frames 1-8 in one session,
-    marching at 0.25 against null scattering at equal time: MSE 0.67x, flicker 0.71x, JOD
-    0.92x). The measure of a later frame wavers with the camera (street at 200 rays, rate
-    0.25: 0.83-1.76 % against 64 spp's 0.63 % tolerance), and a switch there and back would
-    build the octree again (4-7 s). Null scattering is unbiased, so keeping it never shows a
-    step. It also spares every later frame its prediction (0.14-0.21 s on street)."""
-    if previous is None or previous.estimator != "auto" or previous.biased is not False:
-        return None
-    return EstimatorChoice("auto", biased=False, tolerance=tolerated_bias(spp),
-                           reason="null scattering kept from the frame before (a range: its octree "
-                                  "is built, and a switch could only cost)")
 
 
 def chosen_spp(choice: EstimatorChoice) -> float:
@@ -385,24 +331,22 @@ def _known_or_predicted(known: dict, remeasure):
     return measure
 
 
-def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dict,
-                   candidates=None) -> EstimatorChoice:
+def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dict) -> EstimatorChoice:
     for rate in ordered:
         tried[rate] = measure_at(rate)
         if tried[rate] <= tolerance:
             return _marching(rate, tried, tolerance, spp)
-    return _finest_or_null(tried, ordered if candidates is None else candidates, tolerance, spp)
+    return _finest_or_null(tried, ordered, tolerance, spp)
 
 
-def _finest_or_null(tried: dict, ordered, tolerance: float, spp: float,
-                    share: float = 1.0) -> EstimatorChoice:
-    """No rate within the tolerance: the finest candidate while its bias stays within
-    ``NULL_SCATTERING_MARGIN`` (times ``share``) x the tolerance, else null scattering."""
+def _finest_or_null(tried: dict, ordered, tolerance: float, spp: float) -> EstimatorChoice:
+    """No rate within the tolerance: the finest candidate while its error stays within
+    ``NULL_SCATTERING_MARGIN`` x the tolerance, else null scattering."""
     finest = min(ordered) if len(ordered) else None
-    if finest in tried and tried[finest] <= share * NULL_SCATTERING_MARGIN * tolerance:
+    if finest in tried and tried[finest] <= NULL_SCATTERING_MARGIN * tolerance:
         return _marching(finest, tried, tolerance, spp, reason=(
-            f"predicted bias {tried[finest]:.2%} at the finest rate: over {tolerance:.2%} at "
-            f"{spp:g} spp but within {share * NULL_SCATTERING_MARGIN:g}x it, which costs less than "
+            f"predicted error {tried[finest]:.2%} at the finest rate: over {tolerance:.2%} at "
+            f"{spp:g} spp but within {NULL_SCATTERING_MARGIN:g}x it, which costs less than "
             "null scattering's noise and octree"))
     return _null_scattering(tolerance, tried, spp)
 
