@@ -194,9 +194,12 @@ def estimated_frame(make_job: Callable[[RenderOptions], FrameJob], options: Rend
     def prepare(scene) -> Steps[tuple]:
         yield 0.0, "choosing the volume estimator"
         shot = shot_of(scene.frame_current, *shot_range(scene))
-        if shot not in shots:
+        if shot in shots:           # chosen for an earlier frame: this one spends no time on it
+            choice = replace(shots[shot].choice, seconds=0.0)
+        else:
             shots[shot] = choose_for_shot(scene, shot, options, spp)
-        chosen = replace(options, estimator_choice=shots[shot].choice)
+            choice = replace(shots[shot].choice, seconds=shots[shot].seconds)
+        chosen = replace(options, estimator_choice=choice)
         job = make_job(chosen)
         inner = None
         if job.prepare is not None:

@@ -31,7 +31,7 @@ def media_scene(blender, tmp_path, frames=(1, 4), camera_moves=True):
     """The two-media scene (a noise fog box over an OpenVDB smoke) at W x H, SPP samples, no
     denoiser, ray marching at step rate 1 (the artist's: no octree to wait for), EXR frames
     into tmp_path; the camera drifts over ``frames``; the range as the file has it."""
-    from xsl_render.addon import auto_volumes
+    from xsl_render.addon.maps import shot_choice
 
     scene = _two_media_scene(blender)
     scene.render.resolution_x, scene.render.resolution_y = W, H

@@ -281,12 +281,12 @@ def test_auto_gives_the_smoke_its_own_step_and_the_scene_gets_its_materials_back
 
 
 @pytest.mark.blender
-@pytest.mark.parametrize("first, count", [(4096, 16), (16, 256)])
+@pytest.mark.parametrize("first, count", [(4096, 16), (16, 64)])
 def test_settling_a_choice_gives_the_choice_made_for_the_count(blender, first, count):
     """On the two-media scene, auto's choice for one count settled for another is the choice
     made for that count directly: from a ceiling no rate passes at (null scattering) down to
     16 spp, the scene rate from the trials made, the smoke's own step predicted at it; from
-    16 spp (what a still's time budget chooses for first) up to 256, the finer rates
+    16 spp (what a still's time budget chooses for first) up to 64, the finer rates
     predicted then."""
     from xsl_render.addon.maps.estimator_choice import choose_estimator
     from xsl_render.core.sampling.render_options import RenderOptions

@@ -156,8 +156,8 @@ def test_guided_switches_to_the_settled_estimator_and_restores_the_scene(blender
 @pytest.mark.render
 def test_a_guided_range_keeps_the_choice_made_for_its_ceiling(cli, blender, tmp_path):
     """A range pays null scattering's octree once for all its frames, so its frames keep
-    auto's choice for the ceiling (ray marching's cost per sample decides there); a still
-    settles its choice for its budget's count."""
+    auto's choice for the ceiling, one for the shot (ray marching's cost per sample decides
+    there); a still settles its choice for its budget's count."""
     from test_ray_marching import _two_media_scene
 
     scene = _two_media_scene(blender)
@@ -171,7 +171,9 @@ def test_a_guided_range_keeps_the_choice_made_for_its_ceiling(cli, blender, tmp_
     frames = json.loads((tmp_path / "f.json").read_text())["frames"]
     assert [f["estimator"]["tolerance"] for f in frames] == pytest.approx([tolerated_bias(4096)] * 2)
     assert [f["estimator"]["biased"] for f in frames] == [False, False]
-    assert frames[0]["estimator"]["tried"] and frames[1]["estimator"]["tried"] is None   # kept
+    assert frames[0]["estimator"]["tried"]
+    assert {**frames[1]["estimator"], "seconds": 0.0} == {**frames[0]["estimator"], "seconds": 0.0}   # one per shot
+    assert frames[1]["estimator"]["seconds"] == 0.0 < frames[0]["estimator"]["seconds"]    # predicted once
     assert frames[1]["cycles_sync_s"] < 0.5 * frames[0]["cycles_sync_s"] + 0.05
     still = cli("render", path, *common, "--out", tmp_path / "s.exr", "--stats", tmp_path / "s.json")
     assert still.returncode == 0, still.stderr

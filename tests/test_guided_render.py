@@ -132,27 +132,28 @@ def test_guided_render_syncs_heterogeneous_fog_once(blender):
         assert max(final) < 0.3 * outcome.stats.phases_s["sync"], (final, outcome.stats.phases_s)
 
 
-@pytest.mark.parametrize("scene_file, noisy", [("road.blend", False), ("balls_b.blend", True)])
-def test_a_still_sets_the_prefilters_time_aside_only_where_its_pilots_guides_are_noisy(cli, tmp_path, scene_file,
-                                                                                       noisy):
-    """Auto prefilters the denoising guides where they are noisy (noise fog: balls_b), not
-    where they are exact (road's world fog leaves every pixel's guide at its surface), and a
-    still's budget keeps the prefilter's time only where its pilot's guides say it will be
-    spent: on road at uniform 32 spp's time that time was 0.75 s of samples. (A ceiling of 16
-    makes both reserves afford the same count, so the prefilter never costs a power of two;
-    the budget leaves room for it on a loaded host, where auto's prediction alone took 1.5 s
-    and a 1.5-s budget fell below 16 spp, whose power of two the prefilter then may not cost.)"""
+@pytest.mark.parametrize("prefilter", ["ACCURATE", "NONE"])
+def test_a_stills_budget_sets_the_files_prefilter_time_aside(cli, blender, tmp_path, prefilter):
+    """A still's budget keeps back the time its final denoise will take, which is the file's
+    own denoiser: its guides prefiltered (Accurate, Blender 5's default) cost
+    ``PREFILTER_COST`` times the plain denoise. (A ceiling of 16 makes both reserves afford
+    the same count, so the prefilter never costs a power of two on a loaded host.)"""
     from conftest import EXAMPLES
 
     from xsl_render.addon.cycles.denoise import PREFILTER_COST
     from xsl_render.addon.cycles.guided_render import _DENOISE_SECONDS_PER_PIXEL
 
+    blender.ops.wm.open_mainfile(filepath=str(EXAMPLES / "road.blend"), load_ui=False)
+    blender.context.scene.cycles.denoising_prefilter = prefilter
+    path = tmp_path / "road.blend"
+    blender.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
     out = tmp_path / "still.exr"
-    done = cli("render", EXAMPLES / scene_file, "--mode", "guided", "--time-budget", "4", "--max-spp", "16",
+    done = cli("render", path, "--mode", "guided", "--time-budget", "4", "--max-spp", "16",
                "--resolution", f"{W}x{H}", "--estimator", "auto", "--quiet", "--out", out,
                "--stats", tmp_path / "stats.json")
     assert done.returncode == 0, done.stderr
     stats = json.loads((tmp_path / "stats.json").read_text())
-    assert stats["denoise_guides"]["noisy"] is noisy and stats["denoise_guides"]["prefiltered"] is noisy
+    accurate = prefilter == "ACCURATE"
+    assert stats["denoise_guides"]["prefiltered"] is accurate
     plain = _DENOISE_SECONDS_PER_PIXEL * W * H
-    assert stats["denoise_reserved_s"] == pytest.approx(PREFILTER_COST * plain if noisy else plain)
+    assert stats["denoise_reserved_s"] == pytest.approx(PREFILTER_COST * plain if accurate else plain)

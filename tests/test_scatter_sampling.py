@@ -163,6 +163,8 @@ def test_auto_takes_distance_sampling_where_cycles_renders_it_with_less_noise(bl
 @pytest.mark.blender
 @pytest.mark.render
 def test_the_chosen_sampling_reaches_cycles_and_is_put_back(blender, monkeypatch):
+    from dataclasses import replace
+
     from xsl_render.addon.cycles import selective_render as sr
     from xsl_render.addon.cycles.tile_render import CyclesWindowRenderer
     from xsl_render.addon.maps.estimator_choice import with_estimator_choice
@@ -181,6 +183,10 @@ def test_the_chosen_sampling_reaches_cycles_and_is_put_back(blender, monkeypatch
 
     monkeypatch.setattr(CyclesWindowRenderer, "render", spying)
     options = with_estimator_choice(scene, RenderOptions(max_spp=2, estimator="auto").check(), 2)
+    # A homogeneous box alone keeps the scene's estimator (nothing to save): march it as auto
+    # marches elsewhere, with the sampling auto chose for it.
+    assert options.estimator_choice.biased is None
+    options = replace(options, estimator_choice=replace(options.estimator_choice, biased=True, step_rate=1.0))
     outcome = sr.render_uniform(scene, options, spp=2)
     assert set(seen) == {(True, DISTANCE)}
     assert outcome.stats.estimator["scatter_sampling"] == {"material:Fog": DISTANCE}
