@@ -36,7 +36,7 @@ def _auto(spp: float) -> EstimatorChoice:
 
 
 @pytest.mark.parametrize("ceiling, count, rate", [
-    (4096, 1024, 0.25),      # null at the ceiling; 0.25 passes at 1024 spp
+    (4096, 512, 0.25),       # null at the ceiling; 0.25 passes at 512 spp
     (4096, 16, 0.5),
     (64, 4, 0.5),            # 0.25 at the ceiling, 0.5 at 4 spp
     (64, 1, 1.0),
@@ -51,7 +51,7 @@ def test_a_smaller_count_settles_on_the_rate_auto_chooses_for_it(ceiling, count,
 
 
 @pytest.mark.parametrize("first, count, rate, predicted", [
-    (16, 1024, 0.25, (0.5, 0.25)),     # 0.5 at 16 spp; 1024 needs 0.25, predicted now
+    (16, 512, 0.25, (0.5, 0.25)),      # 0.5 at 16 spp; 512 needs 0.25, predicted now
     (16, 32, 0.5, ()),                 # 0.5 passes at 32 spp's tolerance too (0.8 % <= 0.88 %)
     (16, 64, 0.25, (0.25,)),           # not at 64's (0.63 %): 0.25 predicted
     (64, 4, 0.5, ()),                  # fewer: from the trials made

@@ -138,20 +138,15 @@ def test_auto_takes_the_largest_rate_within_the_noise():
     assert set(never.to_dict()["tried"]) == {"4", "2", "1", "0.5", "0.25"}
 
 
-@pytest.mark.parametrize("finest, expected", [
-    (1.01, 0.25),                       # over the tolerance, within twice it: still marching
-    (1.9, 0.25),
-    (2.1, None),                        # past twice the tolerance: null scattering
-])
-def test_the_finest_rate_beats_null_scattering_within_twice_the_tolerance(finest, expected):
-    from xsl_render.core.sampling.volume_estimator import NULL_SCATTERING_MARGIN
-
-    assert NULL_SCATTERING_MARGIN == 2.0
+def test_no_rate_within_the_tolerance_is_null_scattering():
+    """Where even the finest rate's error is over the tolerance, auto takes null scattering:
+    unbiased, whatever it costs (an error a little over the noise made lit seed 5 1.42x the
+    file's p95-tile FLIP, docs/bench_auto_rates.txt)."""
     tolerance = tolerated_bias(16)
-    measures = {rate: value * tolerance for rate, value in
-                {4.0: 40.0, 2.0: 20.0, 1.0: 10.0, 0.5: 3.0, 0.25: finest}.items()}
-    choice = choose_step_rate(measures.get, spp=16)
-    assert choice.step_rate == expected and choice.biased is (expected is not None)
+    measures = {4.0: 40.0, 2.0: 20.0, 1.0: 10.0, 0.5: 3.0, 0.25: 1.01}
+    choice = choose_step_rate(lambda rate: measures[rate] * tolerance, spp=16)
+    assert choice.biased is False and choice.step_rate is None
+    assert set(choice.tried) == set(measures)
 
 
 def test_visible_bias_is_relative_to_what_the_transmittance_can_move():

@@ -3,31 +3,15 @@
 - ``scene``: the scene's own settings (``volume_biased``, ``volume_step_rate``), untouched.
 - ``unbiased``: null scattering (Blender 5's default).
 - ``biased``: ray marching at the scene's step rate, or at ``step_rate`` when given.
-- ``auto``: ray marching at the largest candidate step rate whose predicted visible bias
-  stays below the noise the run's samples leave; else at the finest rate while its bias stays
-  within twice that (``NULL_SCATTERING_MARGIN``); else null scattering. A run that learns its
-  count only while it renders (a time budget) chooses for a count first (a still: its ceiling,
-  at most ``render_request.GUIDED_SPP``; a range: its ceiling), renders its pilot with
+- ``auto``: ray marching at the largest candidate step rate whose predicted picture error
+  (``core.media.light_paths``) stays within the noise the run's samples leave,
+  ``NOISE_AT_ONE_SPP / sqrt(spp)``; else null scattering. A run that learns its count only
+  while it renders (a time budget) chooses for a count first, renders its pilot with
   ``provisional_choice`` and settles with ``settled_for`` once the count is known.
 
-Why ray marching pays: Blender 5 builds a majorant octree for null scattering at every scene
-sync (3.2-3.7 s on the noise-fog example scenes, more than a 16-spp render at 256x144), and
-null scattering's transmittance estimate is noisier. Why it is dangerous: its estimate of
-exp(-tau) is biased, and the bias grows fast with the step (balls_b at rate 2: mean FLIP
-0.133 against 0.073 unbiased). ``core.media.ray_marching`` predicts that bias per camera
-ray from the media themselves; this module turns it into a choice.
-
-The visible-bias measure of a rate: the 95th percentile over the frame of the transmittance
-bias relative to what it can change in a pixel, |dT| / max(min(T, 1 - T), 0.05). A pixel is
-T L_surface + (1 - T) L_fog, so dT moves it by dT (L_surface - L_fog): relative to the
-pixel, at most dT / T (a bright surface in fog) or dT / (1 - T) (a dark one). The tolerance
-at N samples per pixel is ``NOISE_AT_ONE_SPP / sqrt(N)``: below it the bias hides in the
-noise the run leaves. The constant is calibrated on balls_b at 256x192 (``bench/
-bench_estimator.py``), where the question is not whether ray marching beats null scattering
-(every rate up to 2 does, at equal time) but whether a coarser step beats a finer one: rate 1
-(predicted 2.8 %) loses to rate 0.5 (0.3 %) at equal time from 4 spp on (its bias floor, mean
-FLIP 0.06, shows through the noise of 4 spp already), and 0.5 holds its own against 0.25 up
-to 64 spp. 0.05 puts 4 spp's tolerance at 2.5 %, 16 spp's at 1.25 % and 64 spp's at 0.63 %.
+Ray marching pays where Blender 5 would build its majorant octree (seconds at every sync) and
+where its estimate is less noisy; its bias grows fast with the step. The constant's
+calibration on the lit suite is ``bench/bench_auto_rates.py`` (docs/light_paths.md).
 """
 from __future__ import annotations
 
@@ -43,18 +27,9 @@ ESTIMATORS = ("scene", "unbiased", "biased", "auto")
 #: Scene step rates ``auto`` tries, largest first. Rates above 4 were never measured
 #: against a converged reference, so they are not offered.
 CANDIDATE_RATES = (4.0, 2.0, 1.0, 0.5, 0.25)
-#: Relative pixel error the noise of one sample per pixel leaves (after denoising), see the
-#: module notes.
+#: Relative picture error (p95 over the pixels marching changes) that the noise of one sample
+#: per pixel hides after denoising; calibrated by ``bench/bench_auto_rates.py``.
 NOISE_AT_ONE_SPP = 0.15
-#: When no rate is within the tolerance, the finest still beats null scattering while within
-#: this many times it. The tolerance answers "does a coarser step beat a finer one" (its
-#: calibration, module notes); against null scattering the bias competes with null
-#: scattering's own noise and octree. Measured at 16 spp (tolerance 1.25 %), FLIP against
-#: the converged reference: street frame 1, null scattering 0.0789 in 6.96 s; rate 0.25
-#: (predicted 1.26 %) 0.0675 in 4.93 s, p95 region FLIP and MSE lower too; rate 0.5 (3.7 %)
-#: 0.0752 but p95 and MSE worse; rate 1 (13 %) 0.0890. balls_b: rate 1 (2.8 %) 0.067 in ~3 s
-#: against null scattering's 0.0744 in 6.6 s.
-NULL_SCATTERING_MARGIN = 2.0
 #: Transmittances closer to 0 or 1 than this do not make the relative bias explode.
 _FLOOR = 0.05
 #: Cycles' step rate range (``scene.cycles.volume_step_rate``).
@@ -268,7 +243,7 @@ def provisional_choice(choice: EstimatorChoice) -> EstimatorChoice:
     if choice.estimator != "auto" or choice.biased is not False or not choice.tried:
         return choice
     finest = min(choice.tried)
-    if choice.tried[finest] > NULL_SCATTERING_MARGIN * tolerated_bias(1):
+    if choice.tried[finest] > tolerated_bias(1):
         return choice
     return EstimatorChoice("auto", biased=True, step_rate=finest, predicted_bias=choice.tried[finest],
                            tolerance=choice.tolerance, tried=choice.tried,
@@ -336,18 +311,6 @@ def _first_passing(measure_at, ordered, tolerance: float, spp: float, tried: dic
         tried[rate] = measure_at(rate)
         if tried[rate] <= tolerance:
             return _marching(rate, tried, tolerance, spp)
-    return _finest_or_null(tried, ordered, tolerance, spp)
-
-
-def _finest_or_null(tried: dict, ordered, tolerance: float, spp: float) -> EstimatorChoice:
-    """No rate within the tolerance: the finest candidate while its error stays within
-    ``NULL_SCATTERING_MARGIN`` x the tolerance, else null scattering."""
-    finest = min(ordered) if len(ordered) else None
-    if finest in tried and tried[finest] <= NULL_SCATTERING_MARGIN * tolerance:
-        return _marching(finest, tried, tolerance, spp, reason=(
-            f"predicted error {tried[finest]:.2%} at the finest rate: over {tolerance:.2%} at "
-            f"{spp:g} spp but within {NULL_SCATTERING_MARGIN:g}x it, which costs less than "
-            "null scattering's noise and octree"))
     return _null_scattering(tolerance, tried, spp)
 
 
