@@ -21,6 +21,10 @@ but not in transmittance (Jensen: its mean is above exp(-tau)), and it varies fr
 to sample with the offsets. Both are computed here per ray by averaging Cycles' own
 stepping over a lattice of (u, v) offsets, against a fine midpoint integral of the same rays:
 ``bias`` (mean minus truth) and ``spread`` (one sample's standard deviation).
+
+Auto's prediction is ``core.media.light_paths``, which marches the light's whole path with
+the step rules here; ``MarchingPredictor`` (camera rays' transmittance alone) stays as the
+check of those rules against Cycles' own transmittance (``tests/test_ray_marching.py``).
 """
 from __future__ import annotations
 
