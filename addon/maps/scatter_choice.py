@@ -20,23 +20,24 @@ from ..scene.probe import find_lights
 RAY_STRIDE = 3
 
 
-def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[dict, dict, dict]:
+def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[dict, dict, dict, float]:
     """({carrier: the method auto sets}, {carrier: {method: predicted noise}}, {carrier: its
-    own method}): the first and last for the carriers whose method auto changes
+    own method}, the share of the media's single-scattered light gathered in homogeneous
+    media only): the first and last for the carriers whose method auto changes
     (``chosen_methods``), the predictions for all; from every ``RAY_STRIDE``-th of the
     sampled ``pixels``, each ray's pieces between the media's boundaries taken as the
     segments Cycles integrates one by one."""
     pixels = pixels[::RAY_STRIDE]
     lights = _sampled_lights(scene, depsgraph)
     carriers = media_by_carrier(media)
-    if not carriers or not len(lights.power):
-        return {}, {}, {}
+    if not len(lights.power):
+        return {}, {}, {}, 0.0
     origins = rays.origins.reshape(-1, 3)[pixels]
     directions = rays.directions.reshape(-1, 3)[pixels]
     pieces = [(ray, a, min(b, a + MAX_PIECE_LENGTH), active)
               for ray, a, b, active in ray_pieces(rays, media, segments, pixels)]
     if not pieces:
-        return {}, {}, {}
+        return {}, {}, {}, 0.0
     # Every piece's quadrature points, then each medium evaluated once at all of its points.
     fraction = (np.arange(POINTS_PER_PIECE) + 0.5) / POINTS_PER_PIECE
     a = np.array([p[1] for p in pieces])[:, None]
@@ -63,9 +64,13 @@ def scatter_sampling(scene, depsgraph, rays, media, segments, pixels) -> tuple[d
         integral[i], moments[i] = segment_moments(t[i], dt[i], sigma_t[i], sigma_s[i], points[i],
                                                   lights, depth)
         depth += float((sigma_t[i] * dt[i]).sum())
+    homogeneous = np.array([all(media[m].constant_extinction() is not None for m in piece[3]) for piece in pieces])
+    share = float(integral[homogeneous].sum() / integral.sum()) if integral.sum() > 0.0 else 0.0
+    if not keys:
+        return {}, {}, {}, share
     own = {key: step_setting(key)[0].volume_sampling for key in keys}
     methods, noises = chosen_methods(Segments(keys, ray_of, integral, moments, members), own)
-    return methods, noises, {key: own[key] for key in methods}
+    return methods, noises, {key: own[key] for key in methods}, share
 
 
 def _sampled_lights(scene, depsgraph) -> Lights:
