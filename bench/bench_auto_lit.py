@@ -47,6 +47,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))          # the generator and the judge live with the tests
 
 from bench_xmap_oracle import seed_list  # noqa: E402
+from performance_doc import write_bench_output  # noqa: E402
 from support.lit_judge import (DARK_DISPLAY, METRICS, VISIBLY_WORSE, Tier, choice_text,  # noqa: E402
                                is_dark, ratio_text)
 
@@ -249,6 +250,12 @@ def main(argv=None) -> int:
     lines = report(results, args)
     write_text(args.report, "\n".join(lines) + "\n")
     print("\n".join(lines))
+    if args.report.resolve().parent == ROOT / "docs":
+        # performance.md gets the distributions; the per-seed table stays in the report.
+        table_end = lines.index("", 4)
+        summary = lines[:3] + [f"(per seed: docs/{args.report.name})"] + lines[table_end + 2:]
+        write_bench_output("auto_lit", "Random lit scenes (bench_auto_lit.py)", "bench_auto_lit.py", argv,
+                           summary)
     return 0
 
 

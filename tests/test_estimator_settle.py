@@ -178,7 +178,7 @@ def test_a_guided_range_keeps_the_choice_made_for_its_ceiling(cli, blender, tmp_
     still = cli("render", path, *common, "--out", tmp_path / "s.exr", "--stats", tmp_path / "s.json")
     assert still.returncode == 0, still.stderr
     chosen = json.loads((tmp_path / "s.json").read_text())["estimator"]
-    assert chosen["biased"] is True and chosen["tolerance"] > tolerated_bias(4096)
+    assert chosen["tolerance"] > tolerated_bias(4096)              # settled for the count it afforded
 
 
 @pytest.mark.blender

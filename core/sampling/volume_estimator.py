@@ -29,7 +29,7 @@ ESTIMATORS = ("scene", "unbiased", "biased", "auto")
 CANDIDATE_RATES = (4.0, 2.0, 1.0, 0.5, 0.25)
 #: Relative picture error (p95 over the pixels marching changes) that the noise of one sample
 #: per pixel hides after denoising; calibrated by ``bench/bench_auto_rates.py``.
-NOISE_AT_ONE_SPP = 0.15
+NOISE_AT_ONE_SPP = 0.10
 #: Transmittances closer to 0 or 1 than this do not make the relative bias explode.
 _FLOOR = 0.05
 #: Cycles' step rate range (``scene.cycles.volume_step_rate``).
