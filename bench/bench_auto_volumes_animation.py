@@ -94,6 +94,12 @@ def main(argv=None) -> int:
     print("\n".join(lines))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_auto_volumes_animation.txt").write_text("\n".join(lines) + "\n")
+    if not args.tiny:
+        sys.path.insert(0, str(ROOT / "bench"))
+        from performance_doc import write_bench_output
+
+        write_bench_output("auto_volumes_animation", "Ctrl+F12 on the moving street (bench_auto_volumes_animation.py)",
+                           "bench_auto_volumes_animation.py", argv, lines)
     return 0
 
 
