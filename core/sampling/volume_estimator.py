@@ -28,7 +28,8 @@ ESTIMATORS = ("scene", "unbiased", "biased", "auto")
 #: against a converged reference, so they are not offered.
 CANDIDATE_RATES = (4.0, 2.0, 1.0, 0.5, 0.25)
 #: Relative picture error (p95 over the pixels marching changes) that the noise of one sample
-#: per pixel hides after denoising; calibrated by ``bench/bench_auto_rates.py``.
+#: per pixel hides after denoising; calibrated by ``bench/bench_auto_rates.py`` and the lit
+#: suite (docs/light_paths.md).
 NOISE_AT_ONE_SPP = 0.10
 #: Transmittances closer to 0 or 1 than this do not make the relative bias explode.
 _FLOOR = 0.05
@@ -154,8 +155,7 @@ def fixed_choice(estimator: str, step_rate: float | None) -> EstimatorChoice:
 def choose_step_rate(measure_at, spp: float, rates=CANDIDATE_RATES,
                      largest: float | None = None) -> EstimatorChoice:
     """``auto``: the largest rate whose visible error ``measure_at(rate)`` is within the
-    tolerance of ``spp`` samples per pixel, else the finest within the null scattering
-    margin, else null scattering. ``measure_at`` is called from the largest rate down and
+    tolerance of ``spp`` samples per pixel, else null scattering. ``measure_at`` is called from the largest rate down and
     stops at the first that passes (the small rates cost the most to predict); ``largest``
     caps the rates tried (a step rate given with ``auto``). A frame range takes one choice
     per shot (``addon.maps.shot_choice``), so nothing here depends on the frame before."""
@@ -174,8 +174,8 @@ def per_medium_rates(choice: EstimatorChoice, measure_at, groups: dict, count: i
     rate). ``measure_at(rates)``: the visible-bias measure with one scene-equivalent rate per
     medium. Each group in turn takes the coarsest candidate above the scene rate (up to
     ``largest``) that keeps the measure within the choice's limit, the others as chosen so
-    far: the tolerance, or the choice's own measure when it was taken within the null
-    scattering margin (a coarser medium may not make that worse). The candidates are tried
+    far: the larger of the tolerance and the choice's own measure (a coarser medium may not
+    make the frame's error worse than the choice allows). The candidates are tried
     coarsest first (the bias grows with the step, so the first that passes is the one; the
     coarse ones cost least to predict). With one group the scene rate is that group's
     already: the choice is returned unchanged, without predicting.
