@@ -24,15 +24,8 @@ from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_
 W, H = 48, 27
 
 
-@pytest.fixture(autouse=True)
-def _tolerance_units(request, monkeypatch):
-    """The measures here are written against a tolerance of 0.05 / sqrt(spp): the cases are
-    about where a measure falls between counts' tolerances, not about the calibrated
-    constant (``NOISE_AT_ONE_SPP``), which its bench sets. Scenes rendered in Blender keep it."""
-    from xsl_render.core.sampling import volume_estimator
-
-    if request.node.get_closest_marker("blender") is None:
-        monkeypatch.setattr(volume_estimator, "NOISE_AT_ONE_SPP", 0.05)
+#: The measures here are written against a tolerance of 0.05 / sqrt(spp) (conftest).
+pytestmark = pytest.mark.usefixtures("tolerance_units")
 
 
 # -- the predictor with a rate per medium ------------------------------------------------

@@ -20,15 +20,8 @@ from xsl_render.core.sampling.volume_estimator import (EstimatorChoice, settled_
 MEASURES = {4.0: 0.16, 2.0: 0.11, 1.0: 0.04, 0.5: 0.008, 0.25: 0.0018}
 
 
-@pytest.fixture(autouse=True)
-def _tolerance_units(request, monkeypatch):
-    """The measures here are written against a tolerance of 0.05 / sqrt(spp): the cases are
-    about where a measure falls between counts' tolerances, not about the calibrated
-    constant (``NOISE_AT_ONE_SPP``), which its bench sets. Scenes rendered in Blender keep it."""
-    from xsl_render.core.sampling import volume_estimator
-
-    if request.node.get_closest_marker("blender") is None:
-        monkeypatch.setattr(volume_estimator, "NOISE_AT_ONE_SPP", 0.05)
+#: The measures here are written against a tolerance of 0.05 / sqrt(spp) (conftest).
+pytestmark = pytest.mark.usefixtures("tolerance_units")
 
 
 def _auto(spp: float) -> EstimatorChoice:
